@@ -1,0 +1,1 @@
+"""Shipped coefficient files of skysh (installed as the ``skysh.data`` package)."""

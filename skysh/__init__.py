@@ -1,0 +1,36 @@
+"""
+skysh: spherical-harmonic lighting of the Preetham sky for real-time renderers
+============================================================================
+
+-   :class:`skysh.SkySH`: the per-frame runtime (load once, then
+    ``sky.coefficients(sun_zenith, turbidity, sun_azimuth)``).
+-   :mod:`skysh.sh`: real SH mathematics (basis, projection, rotation, irradiance).
+-   :mod:`skysh.preetham`: the Preetham (1999) sky and its reference SH projection.
+
+``import skysh`` is light: it imports numpy only. colour-science is imported the
+first time the sky model or a colourspace conversion is used.
+
+References
+----------
+-   Habel, R., Mustata, B., Wimmer, M. (2008). Efficient Spherical Harmonics
+    Lighting with the Preetham Skylight Model. Eurographics 2008 short papers.
+-   Preetham, A. J., Shirley, P., Smits, B. (1999). A Practical Analytic Model
+    for Daylight. SIGGRAPH 1999.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from skysh._version import __version__
+
+__all__ = ["__version__", "SkySH"]
+
+
+def __getattr__(name: str) -> Any:
+    # The runtime is imported on first use so that ``import skysh`` stays cheap.
+    if name == "SkySH":
+        from skysh.runtime import SkySH
+
+        return SkySH
+    raise AttributeError(f"module 'skysh' has no attribute {name!r}")

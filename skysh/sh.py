@@ -1,0 +1,572 @@
+"""
+Real spherical harmonics
+========================
+
+The SH mathematics every other module of skysh builds on, in the convention of
+``CONVENTIONS.md``: real, orthonormal, **with the Condon-Shortley phase**, index
+``i = l (l + 1) + m``, "bands" ``N`` meaning ``l = 0 .. N - 1``, coefficient arrays
+shaped ``(..., N * N, C)``, right-handed Z-up frame.
+
+-   :func:`n_coeffs`, :func:`index`, :func:`lm`: the index layout.
+-   :func:`basis`: the basis at unit vectors, by a Cartesian recurrence.
+-   :func:`evaluate`: reconstruct a function from its coefficients.
+-   :func:`project`: project a callable by quadrature, Monte Carlo, jittered
+    stratified or Sobol quasi-Monte Carlo sampling.
+-   :func:`rotate_z`, :func:`rotate`: rotation about Z (Habel 2008, eq. 4) and
+    by any rotation matrix.
+-   :func:`convolve`, :func:`cosine_lobe`, :func:`irradiance`: zonal
+    convolution and the clamped-cosine (irradiance) kernel.
+-   :func:`rotation_z_matrix`: the 3x3 matrix of a rotation about +Z.
+
+Layout (as a comprehension)::
+
+    [(l, m) for l in range(bands) for m in range(-l, l + 1)]
+
+References
+----------
+-   Habel, R., Mustata, B., Wimmer, M. (2008). Efficient Spherical Harmonics
+    Lighting with the Preetham Skylight Model. Eurographics short papers.
+    (seed 004: eq. 4, rotation about Z)
+-   "Spherical Harmonics", Wakapon wiki (seed 001): Legendre recurrence, jittered
+    stratified projection, decoding.
+-   Ramamoorthi, R., Hanrahan, P. (2001). An Efficient Representation for
+    Irradiance Environment Maps. SIGGRAPH. (clamped-cosine factors A_l)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Callable
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from skysh._checks import as_float_array, check_bands, check_choice, check_dirs
+
+__all__ = [
+    "MAX_BANDS",
+    "PROJECTION_METHODS",
+    "n_coeffs",
+    "index",
+    "lm",
+    "basis",
+    "evaluate",
+    "project",
+    "quadrature_rule",
+    "rotate_z",
+    "rotate",
+    "rotation_z_matrix",
+    "convolve",
+    "cosine_lobe",
+    "irradiance",
+]
+
+MAX_BANDS: int = 64
+"""Largest band count accepted (l <= 63); the recurrence is stable far beyond it."""
+
+PROJECTION_METHODS: tuple[str, ...] = ("quadrature", "mc", "stratified", "qmc")
+"""Names accepted by :func:`project`'s ``method``."""
+
+DEFAULT_SAMPLES: int = 1 << 16
+"""Sample count of the random projection methods when ``n`` is not given."""
+
+
+# --------------------------------------------------------------------------- #
+# Index layout
+# --------------------------------------------------------------------------- #
+def n_coeffs(bands: int) -> int:
+    """Number of coefficients of ``bands`` bands: ``bands ** 2``."""
+    return check_bands(bands, high=MAX_BANDS) ** 2
+
+
+def index(l: int, m: int) -> int:  # noqa: E741 (l is the standard name)
+    """Flat index ``l (l + 1) + m`` of the coefficient (l, m), ``|m| <= l``."""
+    if l < 0 or abs(m) > l:
+        raise ValueError(f"(l, m) must satisfy l >= 0 and |m| <= l, got ({l}, {m})")
+    return l * (l + 1) + m
+
+
+def lm(i: int) -> tuple[int, int]:
+    """Inverse of :func:`index`: the (l, m) of flat index ``i >= 0``."""
+    if i < 0:
+        raise ValueError(f"i must be >= 0, got {i}")
+    l = math.isqrt(i)  # noqa: E741
+    return l, i - l * (l + 1)
+
+
+@lru_cache(maxsize=None)
+def _l_of_index(bands: int) -> NDArray[np.int64]:
+    """Band l of every flat index, shape (bands**2,)."""
+    return np.repeat(np.arange(bands), 2 * np.arange(bands) + 1)
+
+
+# --------------------------------------------------------------------------- #
+# Basis by recurrence
+# --------------------------------------------------------------------------- #
+@dataclass(frozen=True)
+class _Recurrence:
+    """Constants of the normalised associated-Legendre recurrence for ``bands`` bands.
+
+    With ``Q[l, m](z) = N_lm P_l^m(z) / sin(theta)^m`` (Condon-Shortley phase in
+    P, ``N_lm`` the orthonormal factor, times sqrt(2) for m > 0), the real SH are
+    ``Q[l, |m|](z) * Re((x + i y)^m)`` for m > 0, ``Q[l, 0]`` for m = 0 and
+    ``Q[l, |m|] * Im((x + i y)^|m|)`` for m < 0. Q is a polynomial in z:
+
+        Q[m, m]     = DIAG[m]                                (constant)
+        Q[m + 1, m] = sqrt(2m + 3) z Q[m, m]
+        Q[l, m]     = A[l, m] z Q[l-1, m] - B[l, m] Q[l-2, m]
+    """
+
+    bands: int
+    diag: NDArray[np.float64]  # (bands,)
+    a: NDArray[np.float64]  # (bands, bands) indexed [l, m]
+    b: NDArray[np.float64]  # (bands, bands)
+
+
+@lru_cache(maxsize=None)
+def _recurrence(bands: int) -> _Recurrence:
+    diag = np.empty(bands)
+    diag[0] = 0.5 / math.sqrt(math.pi)
+    for m in range(1, bands):
+        # Q[m,m] / Q[m-1,m-1] = -(2m - 1) * sqrt((2m+1)/(2m) / (2m-1)^2 ...) in closed form:
+        # N_mm (2m-1)!! / (N_{m-1,m-1} (2m-3)!!) = -sqrt((2m + 1) / (2m)), and sqrt(2) once at m = 1.
+        diag[m] = -diag[m - 1] * math.sqrt((2 * m + 1) / (2 * m)) * (math.sqrt(2.0) if m == 1 else 1.0)
+    a = np.zeros((bands, bands))
+    b = np.zeros((bands, bands))
+    for l in range(2, bands):  # noqa: E741
+        for m in range(0, l - 1):
+            a[l, m] = math.sqrt((4 * l * l - 1) / (l * l - m * m))
+            b[l, m] = math.sqrt(((l - 1) ** 2 - m * m) * (2 * l + 1) / ((2 * l - 3) * (l * l - m * m)))
+    for array in (diag, a, b):
+        array.flags.writeable = False
+    return _Recurrence(bands, diag, a, b)
+
+
+def _basis_kn(x: NDArray, y: NDArray, z: NDArray, bands: int) -> NDArray[np.float64]:
+    """Basis at flat coordinate arrays (N,), returned in the (bands**2, N) layout."""
+    rec = _recurrence(bands)
+    n = x.shape[0]
+    out = np.empty((bands * bands, n))
+    # cos / sin of m phi times sin(theta)^m, i.e. Re / Im of (x + i y)^m.
+    cm = np.empty((bands, n))
+    sm = np.empty((bands, n))
+    cm[0] = 1.0
+    sm[0] = 0.0
+    for m in range(1, bands):
+        np.subtract(x * cm[m - 1], y * sm[m - 1], out=cm[m])
+        np.add(x * sm[m - 1], y * cm[m - 1], out=sm[m])
+    # Q rows: q1 = Q[l-1, 0..l-1], q2 = Q[l-2, 0..l-2]; each row (m, N).
+    q2 = None
+    q1 = None
+    for l in range(bands):  # noqa: E741
+        q = np.empty((l + 1, n))
+        if l >= 2:
+            q[: l - 1] = rec.a[l, : l - 1, None] * z * q1[: l - 1] - rec.b[l, : l - 1, None] * q2
+        if l >= 1:
+            q[l - 1] = math.sqrt(2 * l + 1) * rec.diag[l - 1] * z
+        q[l] = rec.diag[l]
+        centre = l * l + l
+        out[centre] = q[0]
+        if l:
+            out[centre + 1 : centre + l + 1] = q[1:] * cm[1 : l + 1]
+            out[l * l : centre] = (q[1:] * sm[1 : l + 1])[::-1]
+        q2, q1 = q1, q
+    return out
+
+
+def basis(dirs: ArrayLike, bands: int) -> NDArray[np.float64]:
+    """
+    Real orthonormal SH (Condon-Shortley phase) at unit vectors.
+
+    Parameters
+    ----------
+    dirs
+        Unit vectors, shape (..., 3), in the Z-up frame of CONVENTIONS.md.
+    bands
+        Number of bands N in [1, 64] (l = 0 .. N - 1).
+
+    Returns
+    -------
+    ndarray
+        Shape (..., N * N), ordered by ``i = l (l + 1) + m``. The result may be a
+        non-contiguous view of a (N * N, ...) buffer.
+
+    Notes
+    -----
+    Computed in Cartesian form: ``Re / Im (x + i y)^m`` by the complex-power
+    recurrence and the normalised associated Legendre functions divided by
+    ``sin(theta)^m`` (polynomials in z) by the three-term recurrence in l, all m
+    of a band in one vectorised step. No trigonometric or special function is
+    called, so the poles need no care. Cost O(N^2) per point.
+
+    Examples
+    --------
+    >>> float(basis([0.0, 0.0, 1.0], 1)[0]) == 0.5 / math.sqrt(math.pi)
+    True
+    """
+    bands = check_bands(bands, high=MAX_BANDS)
+    d = check_dirs(dirs)
+    flat = d.reshape(-1, 3)
+    out = _basis_kn(flat[:, 0], flat[:, 1], flat[:, 2], bands)
+    return np.moveaxis(out.reshape((bands * bands,) + d.shape[:-1]), 0, -1)
+
+
+def _coeff_bands(coeffs: NDArray, name: str = "coeffs", axis: int = 0) -> int:
+    """Band count of a coefficient array whose ``axis`` has length N**2."""
+    k = coeffs.shape[axis] if coeffs.ndim else 0
+    bands = math.isqrt(k)
+    if k == 0 or bands * bands != k:
+        raise ValueError(f"{name} must have a coefficient axis of length N**2 (1, 4, 9, ...), got shape {coeffs.shape}")
+    return bands
+
+
+def evaluate(coeffs: ArrayLike, dirs: ArrayLike) -> NDArray[np.float64]:
+    """
+    Reconstruct the function with SH coefficients ``coeffs`` at ``dirs``.
+
+    Parameters
+    ----------
+    coeffs
+        Shape (N * N,) or (N * N, C).
+    dirs
+        Unit vectors, shape (..., 3).
+
+    Returns
+    -------
+    ndarray
+        Shape (...,) for coefficients (N * N,), else (..., C); same units as the
+        coefficients.
+    """
+    c = as_float_array(coeffs, "coeffs")
+    if c.ndim not in (1, 2):
+        raise ValueError(f"coeffs must have shape (N*N,) or (N*N, C), got {c.shape}")
+    bands = _coeff_bands(c)
+    return basis(dirs, bands) @ c
+
+
+# --------------------------------------------------------------------------- #
+# Projection
+# --------------------------------------------------------------------------- #
+@lru_cache(maxsize=64)
+def quadrature_rule(n_theta: int, hemisphere: bool = False) -> tuple[NDArray, NDArray]:
+    """
+    Product Gauss-Legendre (in cos theta) x uniform azimuth rule on the sphere.
+
+    Parameters
+    ----------
+    n_theta
+        Gauss-Legendre nodes in z = cos(theta) (over [-1, 1], or [0, 1] when
+        ``hemisphere``). The azimuth gets ``2 * n_theta`` uniform nodes.
+    hemisphere
+        Integrate only the upper hemisphere z >= 0.
+
+    Returns
+    -------
+    dirs, weights
+        Shapes (M, 3) and (M,), ``M = 2 * n_theta ** 2``; the weights sum to
+        4 pi (2 pi for the hemisphere). Exact for polynomials of degree
+        ``<= 2 n_theta - 1`` in z times trigonometric polynomials of degree
+        ``< 2 n_theta`` in phi, hence for products of two SH of bands
+        ``<= n_theta``. Read-only arrays, cached.
+    """
+    if n_theta < 1:
+        raise ValueError(f"n_theta must be >= 1, got {n_theta}")
+    z, wz = np.polynomial.legendre.leggauss(n_theta)
+    if hemisphere:
+        z, wz = 0.5 * (z + 1.0), 0.5 * wz
+    n_phi = 2 * n_theta
+    phi = (np.arange(n_phi) + 0.5) * (2.0 * np.pi / n_phi)
+    s = np.sqrt(np.maximum(0.0, 1.0 - z * z))
+    dirs = np.stack(
+        np.broadcast_arrays(s[:, None] * np.cos(phi), s[:, None] * np.sin(phi), z[:, None]), axis=-1
+    ).reshape(-1, 3)
+    weights = np.repeat(wz * (2.0 * np.pi / n_phi), n_phi)
+    dirs.flags.writeable = False
+    weights.flags.writeable = False
+    return dirs, weights
+
+
+@lru_cache(maxsize=16)
+def _quadrature_basis(n_theta: int, hemisphere: bool, bands: int) -> tuple[NDArray, NDArray]:
+    """Nodes and the weighted basis (bands**2, M) of a cached quadrature rule."""
+    dirs, weights = quadrature_rule(n_theta, hemisphere)
+    wy = _basis_kn(dirs[:, 0], dirs[:, 1], dirs[:, 2], bands) * weights
+    wy.flags.writeable = False
+    return dirs, wy
+
+
+def _uniform_dirs(u: NDArray, v: NDArray, hemisphere: bool) -> NDArray:
+    """Area-preserving map of the unit square to the sphere (or upper hemisphere)."""
+    z = 1.0 - u if hemisphere else 1.0 - 2.0 * u
+    s = np.sqrt(np.maximum(0.0, 1.0 - z * z))
+    phi = 2.0 * np.pi * v
+    return np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=-1)
+
+
+def _sample_square(method: str, n: int, seed: int | None) -> NDArray:
+    """(n, 2) points in the unit square for the random methods."""
+    rng = np.random.default_rng(seed)
+    if method == "mc":
+        return rng.random((n, 2))
+    if method == "stratified":
+        k = max(1, math.isqrt(n))
+        a, b = np.meshgrid(np.arange(k), np.arange(k), indexing="ij")
+        cells = np.stack([a.ravel(), b.ravel()], axis=-1)
+        return (cells + rng.random((k * k, 2))) / k
+    from scipy.stats import qmc  # scipy is a runtime dependency; imported here to keep import skysh light
+
+    m = max(0, math.ceil(math.log2(n)))
+    return qmc.Sobol(d=2, scramble=True, rng=rng).random_base2(m)
+
+
+def project(
+    f: Callable[[NDArray], ArrayLike],
+    bands: int,
+    method: str = "quadrature",
+    n: int | None = None,
+    seed: int | None = None,
+    hemisphere: bool = False,
+) -> NDArray[np.float64]:
+    """
+    Project a function on the sphere into SH: ``c_i = integral f(w) Y_i(w) dw``.
+
+    Parameters
+    ----------
+    f
+        Callable taking unit vectors (M, 3) and returning (M,) or (M, C).
+    bands
+        Number of bands N in [1, 64].
+    method
+        ``"quadrature"``: product Gauss-Legendre in cos(theta) x uniform azimuth
+        (deterministic; exact for band-limited ``f`` once ``n_theta >= N + band
+        of f``). ``"mc"``: uniform random directions. ``"stratified"``: jittered
+        stratified sqrt(n) x sqrt(n) grid in the area-preserving square (seed
+        001). ``"qmc"``: scrambled Sobol points (scipy.stats.qmc).
+    n
+        Sample count. Quadrature: about ``n`` nodes, as ``n_theta =
+        max(bands, round(sqrt(n / 2)))`` (default ``n_theta = 2 * bands + 8``).
+        Stratified: rounded down to a square. QMC: rounded up to a power of two.
+        Default for the random methods: 65536.
+    seed
+        Seed of the random methods (ignored by quadrature); same seed, same result.
+    hemisphere
+        Integrate the upper hemisphere z >= 0 only: exact for functions that
+        vanish below the horizon, and twice the sample density there.
+
+    Returns
+    -------
+    ndarray
+        (N * N, C), or (N * N,) when ``f`` returns (M,).
+    """
+    bands = check_bands(bands, high=MAX_BANDS)
+    check_choice(method, "method", PROJECTION_METHODS)
+    if n is not None and (isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1):
+        raise ValueError(f"n must be a positive integer, got {n!r}")
+    if method == "quadrature":
+        n_theta = 2 * bands + 8 if n is None else max(bands, round(math.sqrt(n / 2)))
+        dirs, wy = _quadrature_basis(n_theta, bool(hemisphere), bands)
+        values = _call(f, dirs)
+        return wy @ values
+    square = _sample_square(method, DEFAULT_SAMPLES if n is None else int(n), seed)
+    dirs = _uniform_dirs(square[:, 0], square[:, 1], bool(hemisphere))
+    values = _call(f, dirs)
+    area = 2.0 * np.pi if hemisphere else 4.0 * np.pi
+    y = _basis_kn(dirs[:, 0], dirs[:, 1], dirs[:, 2], bands)
+    return (y @ values) * (area / dirs.shape[0])
+
+
+def _call(f: Callable[[NDArray], ArrayLike], dirs: NDArray) -> NDArray:
+    values = np.asarray(f(dirs), dtype=np.float64)
+    if values.shape[:1] != dirs.shape[:1] or values.ndim > 2:
+        raise ValueError(f"f must return shape (M,) or (M, C) for dirs (M, 3), got {values.shape}")
+    return values
+
+
+# --------------------------------------------------------------------------- #
+# Rotation
+# --------------------------------------------------------------------------- #
+@lru_cache(maxsize=None)
+def _z_pairs(bands: int) -> tuple[NDArray, NDArray, NDArray]:
+    """For every (l, m > 0): flat indices of (l, m), (l, -m), and m."""
+    pos, neg, ms = [], [], []
+    for l in range(1, bands):  # noqa: E741
+        for m in range(1, l + 1):
+            pos.append(index(l, m))
+            neg.append(index(l, -m))
+            ms.append(m)
+    return np.array(pos, dtype=np.intp), np.array(neg, dtype=np.intp), np.array(ms, dtype=np.float64)
+
+
+def rotate_z(coeffs: ArrayLike, angle: ArrayLike) -> NDArray[np.float64]:
+    """
+    Rotate SH coefficients about +Z by ``angle`` (Habel 2008, eq. 4).
+
+    Parameters
+    ----------
+    coeffs
+        Shape (N * N,), (N * N, C) or batched (..., N * N, C).
+    angle
+        Radians, scalar or broadcasting with the batch axes (...,). Positive
+        angles turn +X towards +Y.
+
+    Returns
+    -------
+    ndarray
+        Coefficients of ``f(Rz(angle)^T w)``, same shape as ``coeffs`` (broadcast
+        with ``angle``). For m > 0::
+
+            c'(l, m)  = c(l, m) cos(m a) - c(l, -m) sin(m a)
+            c'(l, -m) = c(l, -m) cos(m a) + c(l, m) sin(m a)
+    """
+    c = as_float_array(coeffs, "coeffs")
+    a = as_float_array(angle, "angle")
+    vector = c.ndim == 1
+    if vector:
+        c = c[:, None]
+    if c.ndim < 2:
+        raise ValueError(f"coeffs must have shape (N*N,) or (..., N*N, C), got {c.shape}")
+    bands = _coeff_bands(c, axis=-2)
+    pos, neg, ms = _z_pairs(bands)
+    ma = a[..., None] * ms  # (..., P)
+    cos, sin = np.cos(ma)[..., None], np.sin(ma)[..., None]
+    shape = np.broadcast_shapes(c.shape, a.shape + (1, 1))
+    out = np.array(np.broadcast_to(c, shape))
+    cp, cn = c[..., pos, :], c[..., neg, :]
+    out[..., pos, :] = cp * cos - cn * sin
+    out[..., neg, :] = cn * cos + cp * sin
+    return out[..., 0] if vector else out
+
+
+def rotation_z_matrix(angle: float) -> NDArray[np.float64]:
+    """3x3 matrix of the rotation about +Z by ``angle`` radians (+X towards +Y)."""
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def _rotation_matrix_sh(R: NDArray, bands: int) -> NDArray[np.float64]:
+    """Block-diagonal (N*N, N*N) SH rotation: D[i, j] = integral Y_i(w) Y_j(R^T w) dw.
+
+    The integrand is a product of two band-limited functions of bands <= N, so
+    the product rule with ``n_theta = N`` nodes is exact (to rounding).
+    """
+    dirs, wy = _quadrature_basis(bands, False, bands)
+    moved = dirs @ R  # rows are R^T w
+    y_moved = _basis_kn(moved[:, 0], moved[:, 1], moved[:, 2], bands)
+    d = wy @ y_moved.T
+    l_of = _l_of_index(bands)
+    d[l_of[:, None] != l_of[None, :]] = 0.0  # exact zeros off the band blocks
+    return d
+
+
+def rotate(coeffs: ArrayLike, R: ArrayLike) -> NDArray[np.float64]:
+    """
+    Rotate SH coefficients by a 3x3 rotation matrix.
+
+    Parameters
+    ----------
+    coeffs
+        Shape (N * N,), (N * N, C) or batched (..., N * N, C); any N <= 64.
+    R
+        Proper rotation matrix (orthonormal, det +1 within 1e-9).
+
+    Returns
+    -------
+    ndarray
+        Coefficients of ``g(w) = f(R^T w)`` (the function turned by R), same
+        shape as ``coeffs``. ``rotate(c, rotation_z_matrix(a)) == rotate_z(c, a)``.
+
+    Notes
+    -----
+    Each band block ``D_l[i, j] = integral Y_i(w) Y_j(R^T w) dw`` is computed by
+    the product quadrature with N nodes in z, which is exact for this
+    band-limited integrand; this replaces the Ivanic-Ruedenberg recurrence with
+    something that shares all of its code with :func:`basis`.
+    """
+    c = as_float_array(coeffs, "coeffs")
+    r = as_float_array(R, "R")
+    if r.shape != (3, 3):
+        raise ValueError(f"R must have shape (3, 3), got {r.shape}")
+    if not (np.allclose(r @ r.T, np.eye(3), atol=1e-9) and abs(np.linalg.det(r) - 1.0) < 1e-9):
+        raise ValueError("R must be a rotation matrix (R R^T = I and det R = +1, within 1e-9)")
+    axis = 0 if c.ndim == 1 else -2
+    if c.ndim == 0:
+        raise ValueError("coeffs must have shape (N*N,) or (..., N*N, C)")
+    bands = _coeff_bands(c, axis=axis)
+    d = _rotation_matrix_sh(r, bands)
+    return d @ c
+
+
+# --------------------------------------------------------------------------- #
+# Convolution and irradiance
+# --------------------------------------------------------------------------- #
+def convolve(coeffs: ArrayLike, per_band: ArrayLike) -> NDArray[np.float64]:
+    """
+    Convolve with a zonal kernel: multiply every coefficient of band l by ``per_band[l]``.
+
+    Parameters
+    ----------
+    coeffs
+        Shape (N * N,) or (..., N * N, C).
+    per_band
+        At least N factors, shape (>= N,); the first N are used.
+    """
+    c = as_float_array(coeffs, "coeffs")
+    k = as_float_array(per_band, "per_band")
+    if c.ndim == 0:
+        raise ValueError("coeffs must have shape (N*N,) or (..., N*N, C)")
+    axis = 0 if c.ndim == 1 else -2
+    bands = _coeff_bands(c, axis=axis)
+    if k.ndim != 1 or k.shape[0] < bands:
+        raise ValueError(f"per_band must have shape (>= {bands},), got {k.shape}")
+    factors = k[_l_of_index(bands)]
+    return c * (factors if c.ndim == 1 else factors[:, None])
+
+
+@lru_cache(maxsize=None)
+def _cosine_lobe(bands: int) -> NDArray[np.float64]:
+    a = np.zeros(bands)
+    for l in range(bands):  # noqa: E741
+        if l == 1:
+            a[l] = 2.0 * math.pi / 3.0
+        elif l % 2 == 0:
+            # Ramamoorthi & Hanrahan 2001, eq. 8:
+            # A_l = 2 pi (-1)^(l/2 - 1) / ((l + 2)(l - 1)) * l! / (2^l ((l/2)!)^2)
+            a[l] = (
+                2.0 * math.pi * (-1.0) ** (l // 2 - 1) / ((l + 2) * (l - 1))
+                * math.comb(l, l // 2) / 2.0**l
+            )
+    a.flags.writeable = False
+    return a
+
+
+def cosine_lobe(bands: int) -> NDArray[np.float64]:
+    """
+    Clamped-cosine convolution factors A_l, l = 0 .. N - 1.
+
+    ``E(l, m) = A_l L(l, m)`` turns radiance into irradiance ``E(n) = integral
+    L(w) max(0, n.w) dw``: A_0 = pi, A_1 = 2 pi / 3, A_2 = pi / 4, odd l > 1 zero,
+    even l by the closed form of Ramamoorthi and Hanrahan (2001).
+    """
+    return _cosine_lobe(check_bands(bands, high=MAX_BANDS)).copy()
+
+
+def irradiance(coeffs: ArrayLike) -> NDArray[np.float64]:
+    """
+    Irradiance coefficients from radiance coefficients (clamped-cosine convolution).
+
+    Parameters
+    ----------
+    coeffs
+        Radiance SH, shape (N * N,) or (..., N * N, C), in cd/m^2 (or any unit L).
+
+    Returns
+    -------
+    ndarray
+        Irradiance SH in L * sr (cd/m^2 * sr = lux for luminance), same shape.
+    """
+    c = as_float_array(coeffs, "coeffs")
+    if c.ndim == 0:
+        raise ValueError("coeffs must have shape (N*N,) or (..., N*N, C)")
+    return convolve(c, _cosine_lobe(_coeff_bands(c, axis=0 if c.ndim == 1 else -2)))
