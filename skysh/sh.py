@@ -55,6 +55,7 @@ __all__ = [
     "evaluate",
     "project",
     "quadrature_rule",
+    "gauss_legendre",
     "rotate_z",
     "rotate",
     "rotation_z_matrix",
@@ -249,6 +250,15 @@ def evaluate(coeffs: ArrayLike, dirs: ArrayLike) -> NDArray[np.float64]:
 # --------------------------------------------------------------------------- #
 # Projection
 # --------------------------------------------------------------------------- #
+@lru_cache(maxsize=256)
+def gauss_legendre(n: int) -> tuple[NDArray, NDArray]:
+    """Gauss-Legendre nodes and weights on [-1, 1] (cached, read-only): exact for degree <= 2n - 1."""
+    nodes, weights = np.polynomial.legendre.leggauss(int(n))
+    nodes.flags.writeable = False
+    weights.flags.writeable = False
+    return nodes, weights
+
+
 @lru_cache(maxsize=64)
 def quadrature_rule(n_theta: int, hemisphere: bool = False) -> tuple[NDArray, NDArray]:
     """
@@ -273,7 +283,7 @@ def quadrature_rule(n_theta: int, hemisphere: bool = False) -> tuple[NDArray, ND
     """
     if n_theta < 1:
         raise ValueError(f"n_theta must be >= 1, got {n_theta}")
-    z, wz = np.polynomial.legendre.leggauss(n_theta)
+    z, wz = gauss_legendre(n_theta)
     if hemisphere:
         z, wz = 0.5 * (z + 1.0), 0.5 * wz
     n_phi = 2 * n_theta

@@ -1,0 +1,393 @@
+"""
+Offline fit of the sky's SH coefficients (Habel 2008, section 3.1)
+==================================================================
+
+Projects the Preetham sky over a grid of (sun zenith, turbidity), fits every
+coefficient of every channel with a 2D Chebyshev polynomial by weighted least
+squares, and measures the result on held-out points. Used by
+``tools/fit_sky.py``; the runtime never imports this module.
+
+-   :class:`FitSettings`: grid, degrees, projection settings.
+-   :func:`chebyshev_grid`: the (sun zenith, turbidity) fitting grid.
+-   :func:`held_out_points`: random points plus the domain corners.
+-   :func:`project_points`: the truth (m >= 0 coefficients) and L_min at points.
+-   :func:`error_denominator`: L_min of the seed's eqs. (2, 3), with a floor.
+-   :func:`fit_table`: weighted least squares per band and channel.
+-   :func:`evaluate_table`: the polynomial tables at points (no rotation).
+-   :func:`error_measures`: E_mean (eq. 3), E_max (eq. 2) and the DC error.
+-   :func:`choose_degrees`: the smallest degrees per band meeting a budget.
+-   :func:`build`: all of the above, returning a :class:`~skysh.coefficient_file.SkyTable`.
+
+The fit minimises the seed's error measure: each grid point's residuals are
+divided by that point's L_min (per channel), so the least-squares objective is
+the sum over grid points of E_mean(theta, tau)^2 (eq. 3).
+
+References
+----------
+-   Habel, R., Mustata, B., Wimmer, M. (2008), seed 004: eqs. (1)-(3).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Any, Callable, Iterable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from skysh import poly, preetham, sh
+from skysh.coefficient_file import SkyTable, zonal_half_layout
+
+__all__ = [
+    "LMIN_FLOOR",
+    "FitSettings",
+    "chebyshev_grid",
+    "held_out_points",
+    "project_points",
+    "error_denominator",
+    "fit_table",
+    "evaluate_table",
+    "error_measures",
+    "choose_degrees",
+    "build",
+]
+
+LMIN_FLOOR: float = 0.05
+"""Floor of a channel's L_min as a fraction of the sky's darkest luminance.
+
+Near sunset at low turbidity the sky leaves the sRGB gamut and its blue channel
+reaches zero or below (about -700 cd/m^2 at sun_zenith = pi/2, T = 2.5); an
+error relative to such an L_min is meaningless, so that channel is measured
+against 5% of the darkest luminance instead (the error report counts how often)."""
+
+
+@dataclass(frozen=True)
+class FitSettings:
+    """Everything that determines a fit (recorded in the file's metadata)."""
+
+    bands: int = 7
+    degrees: tuple[int, int] = (13, 7)
+    grid: tuple[int, int] = (40, 20)
+    colourspace: str = "sRGB"
+    method: str = "quadrature"
+    samples: int | None = None
+    seed: int = 2008
+    held_out: int = 256
+    validation: int = 128
+
+
+def chebyshev_grid(grid: tuple[int, int]) -> tuple[NDArray, NDArray]:
+    """
+    The fitting grid: Chebyshev-Gauss nodes (interior, endpoints excluded) in each variable.
+
+    Returns flat arrays (sun_zenith, turbidity) of ``grid[0] * grid[1]`` points.
+    Nodes cluster towards the domain edges, where a polynomial fit is least
+    constrained; the corners themselves stay free for held-out testing.
+    """
+    def nodes(n: int, lo: float, hi: float) -> NDArray:
+        k = np.arange(n)
+        x = -np.cos((2 * k + 1) * math.pi / (2 * n))
+        return lo + (hi - lo) * 0.5 * (x + 1.0)
+
+    ts = nodes(grid[0], *poly.SUN_ZENITH_DOMAIN)
+    tu = nodes(grid[1], *poly.TURBIDITY_DOMAIN)
+    a, b = np.meshgrid(ts, tu, indexing="ij")
+    return a.ravel(), b.ravel()
+
+
+def held_out_points(count: int, seed: int, corners: bool = True) -> tuple[NDArray, NDArray]:
+    """``count`` uniform random points of the domain (seeded) followed by its 4 corners."""
+    rng = np.random.default_rng(seed)
+    ts = rng.uniform(*poly.SUN_ZENITH_DOMAIN, size=count)
+    tu = rng.uniform(*poly.TURBIDITY_DOMAIN, size=count)
+    if corners:
+        ts = np.concatenate([ts, np.repeat(poly.SUN_ZENITH_DOMAIN, 2)])
+        tu = np.concatenate([tu, np.tile(poly.TURBIDITY_DOMAIN, 2)])
+    return ts, tu
+
+
+def _m_nonnegative_rows(bands: int) -> NDArray[np.intp]:
+    return np.array([sh.index(l, m) for l, m in zonal_half_layout(bands)], dtype=np.intp)
+
+
+def _project_one(args: tuple) -> tuple[NDArray, NDArray]:
+    """Truth (m >= 0 rows) and L_min at one point; top level so process pools can pickle it."""
+    ts, tu, bands, colourspace, method, samples, seed = args
+    coeffs = preetham.sky_sh(ts, tu, bands, colourspace=colourspace, method=method, n=samples, seed=seed)
+    return coeffs[_m_nonnegative_rows(bands)], preetham.sky_minimum(ts, tu, colourspace)
+
+
+def project_points(
+    sun_zenith: NDArray,
+    turbidity: NDArray,
+    settings: FitSettings,
+    mapper: Callable[[Callable, Iterable], Iterable] = map,
+) -> tuple[NDArray, NDArray]:
+    """
+    Project the sky at every point.
+
+    Parameters
+    ----------
+    sun_zenith, turbidity
+        Flat arrays of points.
+    settings
+        Bands, colourspace and projection method / samples / seed.
+    mapper
+        ``map``-like callable (e.g. a process pool's ``map`` wrapped in a
+        progress bar); results must come back in order (determinism).
+
+    Returns
+    -------
+    coeffs, lmin
+        (P, bands (bands + 1) / 2, 3) m >= 0 coefficients in cd/m^2, and (P, 4)
+        sky minima (R, G, B, Y) in cd/m^2.
+    """
+    jobs = [
+        (float(a), float(b), settings.bands, settings.colourspace, settings.method, settings.samples, settings.seed + i)
+        for i, (a, b) in enumerate(zip(sun_zenith, turbidity))
+    ]
+    results = list(mapper(_project_one, jobs))
+    return np.stack([r[0] for r in results]), np.stack([r[1] for r in results])
+
+
+def error_denominator(lmin: NDArray) -> NDArray[np.float64]:
+    """L_min per channel (..., 3) from sky minima (..., 4), floored at LMIN_FLOOR x the luminance minimum."""
+    return np.maximum(lmin[..., :3], LMIN_FLOOR * lmin[..., 3:4])
+
+
+def _band_rows(bands: int) -> list[NDArray[np.intp]]:
+    """Rows of the m >= 0 layout that belong to each band."""
+    layout = zonal_half_layout(bands)
+    return [np.array([k for k, (l, _) in enumerate(layout) if l == band], dtype=np.intp) for band in range(bands)]
+
+
+def _term_mask(degrees: tuple[int, int], within: tuple[int, int]) -> NDArray[np.bool_]:
+    """Which terms of the ``within`` layout belong to a polynomial of ``degrees``."""
+    i, j = np.meshgrid(np.arange(within[0] + 1), np.arange(within[1] + 1), indexing="ij")
+    return ((i <= degrees[0]) & (j <= degrees[1])).ravel()
+
+
+def fit_table(
+    sun_zenith: NDArray,
+    turbidity: NDArray,
+    coeffs: NDArray,
+    denominator: NDArray,
+    degrees: NDArray,
+) -> tuple[NDArray, float]:
+    """
+    Weighted least-squares fit of every coefficient of every channel.
+
+    Parameters
+    ----------
+    sun_zenith, turbidity
+        (P,) grid points.
+    coeffs
+        (P, K_half, 3) m >= 0 coefficients at the points.
+    denominator
+        (P, 3) L_min per point and channel: residuals are divided by it.
+    degrees
+        (bands, 2) per-band (d_theta, d_tau).
+
+    Returns
+    -------
+    table, condition
+        (n_terms(max degrees), K_half, 3) Chebyshev coefficients, and the
+        largest condition number of any weighted design matrix solved.
+    """
+    degrees = np.asarray(degrees, dtype=np.int64)
+    within = (int(degrees[:, 0].max()), int(degrees[:, 1].max()))
+    full = poly.design(sun_zenith, turbidity, within)  # (P, T)
+    table = np.zeros((full.shape[1], coeffs.shape[1], 3))
+    condition = 1.0
+    for band, rows in enumerate(_band_rows(degrees.shape[0])):
+        mask = _term_mask(tuple(degrees[band]), within)
+        solution, cond = _solve(full[:, mask], coeffs[:, rows], denominator)
+        table[np.ix_(mask, rows)] = solution
+        condition = max(condition, cond)
+    return table, condition
+
+
+def _solve(design: NDArray, values: NDArray, denominator: NDArray) -> tuple[NDArray, float]:
+    """Weighted least squares per channel: design (P, T), values (P, R, 3) -> (T, R, 3), condition."""
+    solution = np.empty((design.shape[1], values.shape[1], 3))
+    condition = 1.0
+    for channel in range(3):
+        weight = 1.0 / denominator[:, channel, None]
+        x, _, _, singular = np.linalg.lstsq(design * weight, values[:, :, channel] * weight, rcond=None)
+        solution[:, :, channel] = x
+        condition = max(condition, float(singular[0] / singular[-1]))
+    return solution, condition
+
+
+def evaluate_table(table: NDArray, degrees: NDArray, sun_zenith: NDArray, turbidity: NDArray) -> NDArray:
+    """The fitted m >= 0 coefficients at points: (P, K_half, 3), no Gibbs filter, no rotation."""
+    degrees = np.asarray(degrees)
+    within = (int(degrees[:, 0].max()), int(degrees[:, 1].max()))
+    return np.einsum("pt,tkc->pkc", poly.design(sun_zenith, turbidity, within), table)
+
+
+def error_measures(predicted: NDArray, truth: NDArray, denominator: NDArray, bands: int) -> dict[str, NDArray]:
+    """
+    The seed's error measures over the first ``bands`` bands, worst channel per point.
+
+    Parameters
+    ----------
+    predicted, truth
+        (P, K_half, 3) m >= 0 coefficients (the m < 0 ones are zero in both).
+    denominator
+        (P, 3) L_min per channel (:func:`error_denominator`).
+    bands
+        Bands included.
+
+    Returns
+    -------
+    dict
+        ``e_mean`` (eq. 3) and ``e_max`` (eq. 2) as fractions, ``dc`` the
+        relative error of the DC term; each (P,), the worst channel. With the
+        sun at azimuth 0; E_mean is invariant under the runtime's rotation,
+        E_max (an L1 sum) is not.
+    """
+    k = bands * (bands + 1) // 2
+    diff = predicted[:, :k] - truth[:, :k]
+    e_mean = np.sqrt(np.sum(diff**2, axis=1)) / denominator
+    e_max = np.sum(np.abs(diff), axis=1) / denominator
+    dc = np.abs(diff[:, 0]) / np.abs(truth[:, 0])
+    return {"e_mean": e_mean.max(axis=1), "e_max": e_max.max(axis=1), "dc": dc.max(axis=1)}
+
+
+def choose_degrees(
+    tolerance: float,
+    bands: int,
+    max_degrees: tuple[int, int],
+    grid: tuple[NDArray, NDArray, NDArray, NDArray],
+    validation: tuple[NDArray, NDArray, NDArray, NDArray],
+) -> NDArray[np.int64]:
+    """
+    Smallest degrees per band whose fit meets an E_mean budget on validation points.
+
+    Each band gets the budget ``tolerance / sqrt(bands)`` (so the total E_mean
+    over all bands is at most ``tolerance``); among the degrees (d_theta <=
+    max, d_tau <= max) meeting it, the one with the fewest terms wins (ties:
+    lower d_theta). A band that cannot meet it gets ``max_degrees``.
+
+    Parameters
+    ----------
+    grid, validation
+        (sun_zenith, turbidity, coeffs, denominator) of the fitting grid and of
+        separate validation points (never the held-out test points).
+    """
+    budget = tolerance / math.sqrt(bands)
+    candidates = sorted(
+        ((i, j) for i in range(max_degrees[0] + 1) for j in range(max_degrees[1] + 1)),
+        key=lambda d: (poly.n_terms(d), d[0]),
+    )
+    chosen = np.tile(np.asarray(max_degrees, dtype=np.int64), (bands, 1))
+    rows = _band_rows(bands)
+    for band in range(bands):
+        for degrees in candidates:
+            fitted, _ = _solve(poly.design(grid[0], grid[1], degrees), grid[2][:, rows[band]], grid[3])
+            predicted = np.einsum("pt,trc->prc", poly.design(validation[0], validation[1], degrees), fitted)
+            diff = predicted - validation[2][:, rows[band]]
+            if (np.sqrt(np.sum(diff**2, axis=1)) / validation[3]).max() <= budget:
+                chosen[band] = degrees
+                break
+    return chosen
+
+
+def build(
+    settings: FitSettings,
+    tolerance: float | None = None,
+    mapper: Callable[[Callable, Iterable], Iterable] = map,
+    provenance: dict[str, Any] | None = None,
+) -> tuple[SkyTable, dict[str, Any]]:
+    """
+    Project, fit, measure: the whole offline pipeline.
+
+    Parameters
+    ----------
+    settings
+        :class:`FitSettings`.
+    tolerance
+        If given, choose per-band degrees (at most ``settings.degrees``) so the
+        worst validation E_mean over all bands stays within it (a fraction,
+        e.g. 1e-3 for 0.1%); else every band gets ``settings.degrees``.
+    mapper
+        ``map``-like callable for the projections (parallelism, progress).
+    provenance
+        Extra metadata (package version, git commit, command line).
+
+    Returns
+    -------
+    table, report
+        The :class:`SkyTable` (with metadata) and the held-out error report
+        (also stored in the metadata under ``"errors"``).
+    """
+    grid_ts, grid_tu = chebyshev_grid(settings.grid)
+    test_ts, test_tu = held_out_points(settings.held_out, settings.seed)
+    points_ts = np.concatenate([grid_ts, test_ts])
+    points_tu = np.concatenate([grid_tu, test_tu])
+    if tolerance is not None:
+        val_ts, val_tu = held_out_points(settings.validation, settings.seed + 1, corners=False)
+        points_ts = np.concatenate([points_ts, val_ts])
+        points_tu = np.concatenate([points_tu, val_tu])
+    coeffs, lmin = project_points(points_ts, points_tu, settings, mapper)
+    denominator = error_denominator(lmin)
+    n_grid, n_test = grid_ts.size, test_ts.size
+    g = slice(0, n_grid)
+    t = slice(n_grid, n_grid + n_test)
+    if tolerance is None:
+        degrees = np.tile(np.asarray(settings.degrees, dtype=np.int64), (settings.bands, 1))
+    else:
+        v = slice(n_grid + n_test, None)
+        degrees = choose_degrees(
+            tolerance,
+            settings.bands,
+            settings.degrees,
+            (grid_ts, grid_tu, coeffs[g], denominator[g]),
+            (points_ts[v], points_tu[v], coeffs[v], denominator[v]),
+        )
+    table, condition = fit_table(grid_ts, grid_tu, coeffs[g], denominator[g], degrees)
+    predicted = evaluate_table(table, degrees, test_ts, test_tu)
+    report: dict[str, Any] = {"held_out_points": int(n_test), "by_bands": {}}
+    for bands in range(1, settings.bands + 1):
+        measures = error_measures(predicted, coeffs[t], denominator[t], bands)
+        worst = int(np.argmax(measures["e_mean"]))
+        report["by_bands"][str(bands)] = {
+            "e_mean_worst": float(measures["e_mean"].max()),
+            "e_mean_mean": float(measures["e_mean"].mean()),
+            "e_max_worst": float(measures["e_max"].max()),
+            "dc_worst": float(measures["dc"].max()),
+            "worst_at": [float(test_ts[worst]), float(test_tu[worst])],
+        }
+    report["floored_channels"] = int(np.sum(lmin[t, :3] < LMIN_FLOOR * lmin[t, 3:4]))
+    metadata: dict[str, Any] = {
+        "description": "Chebyshev fit of the SH projection of the Preetham (1999) sky (Habel et al. 2008)",
+        "conventions": {
+            "sh": "real orthonormal, Condon-Shortley phase, index l(l+1)+m; stored rows m >= 0 only",
+            "frame": "right-handed, Z up; sun at azimuth 0 (+X); runtime rotates about Z (Habel eq. 4)",
+            "units": "cd/m^2 (linear RGB; R = G = B = Y for the colourspace's white)",
+        },
+        "colourspace": settings.colourspace,
+        "domain": {"sun_zenith": list(poly.SUN_ZENITH_DOMAIN), "turbidity": list(poly.TURBIDITY_DOMAIN)},
+        "basis": "Chebyshev T_i(x) T_j(y), x = 2 sun_zenith / (pi/2) - 1, y = (2 turbidity - 8.5) / 3.5",
+        "term_order": "i (d_tau + 1) + j for the largest degrees of any band",
+        "degrees": degrees.tolist(),
+        "requested_degrees": list(settings.degrees),
+        "tolerance": tolerance,
+        "weighting": "residuals divided by L_min per point and channel (seed eq. 3); floor "
+        f"{LMIN_FLOOR} x min luminance",
+        "condition_number": condition,
+        "grid": {"kind": "Chebyshev-Gauss nodes", "shape": list(settings.grid)},
+        "projection": {
+            "method": settings.method,
+            "samples": settings.samples,
+            "seed": settings.seed,
+            "quadrature_theta_nodes": preetham.SKY_SH_THETA_NODES if settings.samples is None else None,
+        },
+        "held_out": {"count": settings.held_out, "seed": settings.seed, "corners": True},
+        "settings": asdict(settings),
+        "errors": report,
+    }
+    metadata.update(provenance or {})
+    return SkyTable(table=table, degrees=degrees, metadata=metadata), report
