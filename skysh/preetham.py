@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import math
 from functools import lru_cache
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -65,6 +65,7 @@ __all__ = [
     "sky_quadrature_rule",
     "sky_sh",
     "sky_minimum",
+    "luminance_scale",
 ]
 
 SUN_ZENITH_RANGE: tuple[float, float] = (0.0, math.pi / 2.0)
@@ -98,6 +99,8 @@ ZENITH_Y_MATRIX: NDArray[np.float64] = np.array(
 )
 """Zenith chromaticity y = [T^2, T, 1] M_y [ts^3, ts^2, ts, 1]^T."""
 
+_PEREZ_Y_SLOPE: tuple[float, ...] = tuple(float(v) for v in PEREZ_Y[:, 0])
+_PEREZ_Y_INTERCEPT: tuple[float, ...] = tuple(float(v) for v in PEREZ_Y[:, 1])
 _PEREZ_ALL: NDArray[np.float64] = np.stack([PEREZ_X, PEREZ_YC, PEREZ_Y])  # (3 quantities x, y, Y; 5; 2)
 for _array in (PEREZ_Y, PEREZ_X, PEREZ_YC, ZENITH_X_MATRIX, ZENITH_Y_MATRIX, _PEREZ_ALL):
     _array.flags.writeable = False
@@ -140,8 +143,21 @@ def perez(cos_theta: ArrayLike, gamma: ArrayLike, cos_gamma: ArrayLike, coeffici
 def zenith_luminance(sun_zenith: ArrayLike, turbidity: ArrayLike) -> NDArray[np.float64]:
     """Zenith luminance Y_z in cd/m^2 (Preetham's kcd/m^2 times 1000)."""
     ts, t = _check_sun(sun_zenith, turbidity)
+    return _zenith_luminance(ts, t, np)
+
+
+def _zenith_luminance(ts: Any, t: Any, ops: Any = math) -> Any:
+    """Y_z in cd/m^2 with ``ops`` = math (floats, the runtime's fast path) or numpy (arrays); unchecked."""
     chi = (4.0 / 9.0 - t / 120.0) * (math.pi - 2.0 * ts)
-    return 1000.0 * ((4.0453 * t - 4.9710) * np.tan(chi) - 0.2155 * t + 2.4192)
+    return 1000.0 * ((4.0453 * t - 4.9710) * ops.tan(chi) - 0.2155 * t + 2.4192)
+
+
+def _luminance_scale(ts: Any, t: Any, ops: Any = math) -> Any:
+    """Y_z / F_Y(0, ts) with ``ops`` = math or numpy; unchecked (see :func:`luminance_scale`)."""
+    a, b, c, d, e = (_PEREZ_Y_SLOPE[k] * t + _PEREZ_Y_INTERCEPT[k] for k in range(5))
+    cos_ts = ops.cos(ts)
+    f_zenith = (1.0 + a * ops.exp(b)) * (1.0 + c * ops.exp(d * ts) + e * cos_ts * cos_ts)
+    return _zenith_luminance(ts, t, ops) / f_zenith
 
 
 def zenith_chromaticity(sun_zenith: ArrayLike, turbidity: ArrayLike) -> NDArray[np.float64]:
@@ -152,6 +168,27 @@ def zenith_chromaticity(sun_zenith: ArrayLike, turbidity: ArrayLike) -> NDArray[
     x = np.einsum("...i,ij,...j->...", tv, ZENITH_X_MATRIX, sv)
     y = np.einsum("...i,ij,...j->...", tv, ZENITH_Y_MATRIX, sv)
     return np.stack([x, y], axis=-1)
+
+
+def luminance_scale(sun_zenith: ArrayLike, turbidity: ArrayLike) -> NDArray[np.float64]:
+    """
+    The sky's luminance scale Y_z / F_Y(0, theta_s), cd/m^2: sky luminance = scale x F_Y(theta, gamma).
+
+    Parameters
+    ----------
+    sun_zenith, turbidity
+        Radians in [0, pi/2] and turbidity in [1.7, 10], broadcasting.
+
+    Notes
+    -----
+    The fitted tables store the sky's coefficients divided by this factor: it
+    carries the fast variation with the sun (tan chi in Y_z) and a pole of
+    1 / F_Y(0, theta_s) just below the turbidity domain (1 + A e^B vanishes
+    near T = 1.6), both of which a low-degree polynomial fits poorly. It costs
+    one tan and two exp per evaluation.
+    """
+    ts, t = _check_sun(sun_zenith, turbidity)
+    return _luminance_scale(ts, t, np)
 
 
 def _sun_dir(sun_zenith: float, sun_azimuth: float) -> NDArray[np.float64]:
@@ -188,17 +225,20 @@ def xyY(dirs: ArrayLike, sun_zenith: float, sun_azimuth: float, turbidity: float
         raise ValueError("sun_zenith and turbidity must be scalars here (use the runtime for batches)")
     ts, t = float(ts), float(t)
     sun = _sun_dir(ts, phi_s)
-    cos_theta = d[..., 2]
-    cos_gamma = np.clip(d @ sun, -1.0, 1.0)  # rounding can push the dot product past 1 (PREETHAM.md)
-    gamma = np.arccos(cos_gamma)
+    # The zenith rides along as the last direction so F(0, theta_s) is computed on
+    # exactly the path of every view, and the zenith value is exactly (x_z, y_z, Y_z).
+    flat = np.concatenate([d.reshape(-1, 3), [[0.0, 0.0, 1.0]]])
+    cos_theta = flat[:, 2]
+    # gamma by atan2(|d x s|, d . s): accurate near the sun, where arccos of the
+    # dot product loses half the digits (and the dot product can exceed 1).
+    gamma = np.arctan2(np.linalg.norm(np.cross(flat, sun), axis=-1), flat @ sun)
+    cos_gamma = np.cos(gamma)
     coeffs = perez_coefficients(t)  # (3, 5): x, y, Y
-    f_view = perez(cos_theta[..., None], gamma[..., None], cos_gamma[..., None], coeffs)
-    f_zenith = perez(1.0, ts, math.cos(ts), coeffs)
+    f = perez(cos_theta[:, None], gamma[:, None], cos_gamma[:, None], coeffs)
     zenith = np.array([*zenith_chromaticity(ts, t), zenith_luminance(ts, t)])
-    values = zenith * f_view / f_zenith
-    below = cos_theta < 0.0
-    values[below] = np.array([zenith[0], zenith[1], 0.0])
-    return values
+    values = zenith * (f[:-1] / f[-1])
+    values[cos_theta[:-1] < 0.0] = np.array([zenith[0], zenith[1], 0.0])
+    return values.reshape(d.shape)
 
 
 def luminance(dirs: ArrayLike, sun_zenith: float, sun_azimuth: float, turbidity: float) -> NDArray[np.float64]:
@@ -346,6 +386,9 @@ def sky_sh(
     check_choice(method, "method", sh.PROJECTION_METHODS)
     ts, t = _check_sun(sun_zenith, turbidity)
     ts, t = float(ts), float(t)
+    azimuth = float(check_range(sun_azimuth, "sun_azimuth", -1e6, 1e6, unit="rad"))
+    if n is not None and (isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1):
+        raise ValueError(f"n must be a positive integer, got {n!r}")
     rgb_from_xyz_matrix(colourspace)  # validate the name before the projection
     if method == "quadrature":
         n_theta = SKY_SH_THETA_NODES if n is None else max(bands, round(math.sqrt(n / 4.0)))
@@ -357,7 +400,7 @@ def sky_sh(
         coeffs = sh.project(
             lambda dirs: radiance(dirs, ts, 0.0, t, colourspace), bands, method=method, n=n, seed=seed, hemisphere=True
         )
-    return sh.rotate_z(coeffs, sun_azimuth) if sun_azimuth else coeffs
+    return sh.rotate_z(coeffs, azimuth) if azimuth else coeffs
 
 
 _MIN_GRID_STEP: float = math.radians(2.0)

@@ -156,7 +156,9 @@ def sky_samples(n: int) -> np.ndarray:
         from skysh import SkySH
 
         sky = SkySH.load()
-        return np.stack([np.asarray(sky.coefficients(z, t, sun_azimuth=a, bands=3, gibbs=True)) for z, t, a in zip(zen, tur, azi)])
+        return np.stack(
+            [np.asarray(sky.coefficients(z, t, sun_azimuth=a, bands=3, gibbs=True)) for z, t, a in zip(zen, tur, azi)]
+        )
     except Exception:  # noqa: BLE001 - the runtime is optional here
         from skysh import preetham
 
@@ -275,12 +277,13 @@ def _adversarial_functions() -> np.ndarray:
     rng = np.random.default_rng(7)
     out = []
     base = rng.normal(size=9)
-    for lin in ([0, 0, 0], [1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1], [1e-300, 0, 0], [1e-160, 1e-160, 0]):
+    axes = ([0, 0, 0], [1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1])
+    for lin in axes + ([1e-300, 0, 0], [1e-160, 1e-160, 0]):  # zero, along every axis, subnormal
         c = base.copy()
         c[1:4] = lin
         out.append(c)
     for i in (4, 5, 7, 8):  # pure |m| = 2 and |m| = 1, with and without DC and a linear part
-        for extra in ([0.0] * 9, [1.0] + [0.0] * 8, [1.0, 0.0, 0.7, 0.0, 0, 0, 0, 0, 0], [0.5, 0.3, 0.0, -0.4, 0, 0, 0, 0, 0]):
+        for extra in ([0.0] * 9, [1.0] + [0.0] * 8, [1.0, 0, 0.7, 0] + [0.0] * 5, [0.5, 0.3, 0, -0.4] + [0.0] * 5):
             c = np.array(extra, dtype=float)
             c[i] += 1.0
             out.append(c)
@@ -372,7 +375,8 @@ class TestAlignToLinearDirection:
             r = frames[k]
             np.testing.assert_allclose(r @ r.T, np.eye(3), atol=1e-14)
             assert np.linalg.det(r) == pytest.approx(1.0, abs=1e-14)
-            np.testing.assert_allclose(rotated[:, k], sh.rotate(f[:, k], r.T), atol=1e-13 * (1 + np.abs(f[:, k]).max()))
+            expected = sh.rotate(f[:, k], r.T)
+            np.testing.assert_allclose(rotated[:, k], expected, atol=1e-13 * (1 + np.abs(f[:, k]).max()))
         np.testing.assert_allclose(rotated[[1, 3]], 0.0, atol=0)
         assert np.all(rotated[2] >= 0.0)
         np.testing.assert_allclose(rotated[2], np.linalg.norm(f[1:4], axis=0), rtol=1e-14)
@@ -479,22 +483,22 @@ class TestDering:
         assert np.all(_min_rel(out, "radiance") >= -NONNEG_RTOL)
 
     def test_least_windowing_on_the_candidate_grid(self) -> None:
-        """The candidate before the chosen one (1/32 row less) fails the bound in some channel."""
+        """The scales lie on the table path, and the candidate 1/32 row before them fails the bound."""
         rng = np.random.default_rng(9)
         c = np.stack([light(rng, 3) for _ in range(10)])
         _, scales = dering.dering(c)
         table = dering.WINDOW_TABLE
-        tau = np.interp(-scales[:, 2], -table[:, 2], np.arange(table.shape[0]))
-        prev = np.maximum(tau - 1.0 / 32.0, 0.0)
-        i = np.minimum(np.floor(prev).astype(int), table.shape[0] - 2)
-        s_prev = table[i] + (prev - i)[:, None] * (table[i + 1] - table[i])
-        np.testing.assert_allclose(scales, table[np.floor(tau).astype(int).clip(0, 5)]
-                                   + (tau - np.floor(tau).clip(0, 5))[:, None]
-                                   * (table[np.floor(tau).astype(int).clip(0, 5) + 1] - table[np.floor(tau).astype(int).clip(0, 5)]),
-                                   atol=1e-12)  # the scales lie on the table path
-        windowed = tau > 0
+
+        def on_path(tau: np.ndarray) -> np.ndarray:
+            i = np.minimum(np.floor(tau).astype(int), table.shape[0] - 2)
+            return table[i] + (tau - i)[:, None] * (table[i + 1] - table[i])
+
+        tau = np.interp(-scales[:, 2], -table[:, 2], np.arange(table.shape[0]))  # band 2 strictly decreases
+        np.testing.assert_allclose(scales, on_path(tau), atol=1e-12)
+        np.testing.assert_allclose(tau * 32, np.round(tau * 32), atol=1e-6)  # on the 1/32-row grid
+        s_prev = on_path(np.maximum(tau - 1.0 / 32.0, 0.0))
         bound_prev = dering.min_bound(irradiance(c * s_prev[:, L_OF[:9], None]))
-        assert np.all((bound_prev < 0).any(axis=-1)[windowed])
+        assert np.all((bound_prev < 0).any(axis=-1)[tau > 0])
 
     def test_exact_method_never_windows_more(self) -> None:
         rng = np.random.default_rng(12)
@@ -610,7 +614,8 @@ class TestDirectionalLight:
         sky = sky_samples(4)
         sun = unit(np.array([[0.2, 0.1, 0.97], [0.9, 0.0, 0.44], [0.0, -0.7, 0.71], [1.0, 0.0, 0.0]]))
         deringed, _ = dering.dering(sky)
-        total = deringed + dering.directional_light_sh(sun, np.array([1e5, 1e5, 1e5]), window=dering.WINDOW_TABLE[-1])
+        sun_sh = dering.directional_light_sh(sun, np.array([1e5, 1e5, 1e5]), window=dering.WINDOW_TABLE[-1])
+        total = deringed + sun_sh
         assert np.all(_min_rel(total) >= -NONNEG_RTOL)
 
     def test_batched_and_bad_input(self) -> None:

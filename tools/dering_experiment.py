@@ -117,8 +117,12 @@ def _arc(rng: np.random.Generator) -> NDArray:
 def lights(n: int, rng: np.random.Generator, bands: int) -> dict[str, NDArray]:
     """Non-negative adversarial lights, radiance SH (m, bands^2, 3) per family."""
     out: dict[str, list[NDArray]] = {"single delta": [], "HDR deltas": [], "linear lights": [], "mixed": []}
-    fib = dering._fibonacci_sphere(max(n // 4, 8))
-    for d in fib:
+    m = max(n // 4, 8)
+    i = np.arange(m) + 0.5
+    z = 1.0 - 2.0 * i / m
+    phi = i * math.pi * (3.0 - math.sqrt(5.0))  # Fibonacci lattice: deltas in evenly spread directions
+    r = np.sqrt(1.0 - z * z)
+    for d in np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1):
         out["single delta"].append(sh.basis(d, bands)[:, None] * np.ones(3))
     for _ in range(n // 4):
         k = rng.integers(1, 5)

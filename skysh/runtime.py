@@ -1,0 +1,307 @@
+"""
+The per-frame runtime (Habel 2008, sections 3.1-3.3)
+====================================================
+
+-   :class:`SkySH`: load the fitted tables once, then per frame
+    :meth:`SkySH.coefficients` evaluates the polynomials for the sun and
+    turbidity, applies the zonal sinc Gibbs filter (eq. 5), rotates about Z by
+    the sun's azimuth (eq. 4), optionally deringes (Sloan 2017) and convolves
+    with the clamped cosine (irradiance).
+
+Everything static is prepared in :meth:`SkySH.__init__`: for every band count
+N and Gibbs setting, one table whose zonal rows are pre-scaled by
+sinc(pi l / N) (the seed's own optimisation) and whose m < 0 columns repeat
+their m > 0 partners, so that the rotation is one multiplication by
+cos(|m| a) or sin(|m| a). A scalar call is then: validation on Python floats,
+two short Chebyshev recurrences and the rotation factors in Python floats
+(packed into one array), the luminance scale (one tan, two exp), two
+matrix-vector products over the m >= 0 table, and one gather-multiply that
+rotates (eq. 4) and fills the m < 0 coefficients. A batch is one design matrix,
+one matrix product over the full table and one multiplication by the rotation
+factors.
+
+``import skysh.runtime`` imports numpy and the coefficient file reader only:
+not colour-science, matplotlib or the offline fit.
+
+References
+----------
+-   Habel, R., Mustata, B., Wimmer, M. (2008), seed 004: eqs. (1), (4), (5).
+-   Sloan, P.-P. (2017). Deringing Spherical Harmonics (seed 000).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from skysh import coefficient_file, poly, sh
+from skysh._checks import check_bands, check_range
+from skysh.preetham import _luminance_scale
+
+__all__ = ["SkySH", "gibbs_factors"]
+
+_X_SCALE: float = 2.0 / (poly.SUN_ZENITH_DOMAIN[1] - poly.SUN_ZENITH_DOMAIN[0])
+_X_SHIFT: float = (poly.SUN_ZENITH_DOMAIN[0] + poly.SUN_ZENITH_DOMAIN[1]) / (
+    poly.SUN_ZENITH_DOMAIN[1] - poly.SUN_ZENITH_DOMAIN[0]
+)
+_LOG_T: tuple[float, float] = (math.log(poly.TURBIDITY_DOMAIN[0]), math.log(poly.TURBIDITY_DOMAIN[1]))
+_Y_SCALE: float = 2.0 / (_LOG_T[1] - _LOG_T[0])
+_Y_SHIFT: float = (_LOG_T[0] + _LOG_T[1]) / (_LOG_T[1] - _LOG_T[0])
+_ZMIN, _ZMAX = poly.SUN_ZENITH_DOMAIN
+_TMIN, _TMAX = poly.TURBIDITY_DOMAIN
+
+
+def gibbs_factors(bands: int) -> NDArray[np.float64]:
+    """
+    Zonal Gibbs filter of Habel eq. (5): sinc(pi l / N) for l = 0 .. N - 1, N = ``bands``.
+
+    Only the zonal (m = 0) coefficients are multiplied by these factors; the
+    factor of l = 0 is 1.
+    """
+    bands = check_bands(bands)
+    return np.sinc(np.arange(bands) / bands)  # numpy's sinc(x) = sin(pi x) / (pi x)
+
+
+class _Plan:
+    """Precomputed arithmetic of one (bands, gibbs) setting."""
+
+    __slots__ = ("bands", "degrees", "half_table", "table_flat", "source3", "rot_index3", "rot_index", "lobe")
+
+    def __init__(self, sky_table: coefficient_file.SkyTable, bands: int, gibbs: bool) -> None:
+        self.bands = bands
+        d = sky_table.degrees[:bands].max(axis=0)
+        self.degrees = (int(d[0]), int(d[1]))
+        k = bands * bands
+        k_half = bands * (bands + 1) // 2
+        lms = [sh.lm(i) for i in range(k)]
+        terms = [
+            poly.term_index(i, j, sky_table.max_degrees)
+            for i in range(self.degrees[0] + 1)
+            for j in range(self.degrees[1] + 1)
+        ]
+        half = sky_table.table[np.ix_(terms, np.arange(k_half))].copy()  # (T, K_half, 3), m >= 0 rows
+        if gibbs:  # Habel eq. (5) folded into the zonal rows (the seed's own optimisation)
+            factors = gibbs_factors(bands)
+            for row, (l, m) in enumerate(coefficient_file.zonal_half_layout(bands)):
+                if m == 0:
+                    half[:, row] *= factors[l]
+        # Scalar path: the m >= 0 table, contracted in theta then in turbidity.
+        self.half_table = np.ascontiguousarray(half.reshape(self.degrees[0] + 1, -1))
+        # Source (m >= 0 row, channel) and rotation factor of every output value;
+        # rotation factors are laid out [cos(0 a) .. cos((N-1) a), sin(0 a) .. sin((N-1) a)].
+        position = {lm_: row for row, lm_ in enumerate(coefficient_file.zonal_half_layout(bands))}
+        source = np.array([position[(l, abs(m))] for l, m in lms], dtype=np.intp)
+        m = np.array([m for _, m in lms])
+        self.rot_index = np.where(m < 0, bands + np.abs(m), np.abs(m)).astype(np.intp)
+        self.source3 = (3 * source[:, None] + np.arange(3)).ravel()
+        self.rot_index3 = np.repeat(self.rot_index, 3)
+        # Batch path: the full table (m < 0 columns repeat their m > 0 partners).
+        self.table_flat = np.ascontiguousarray(half[:, source].reshape(len(terms), k * 3))
+        self.lobe = sh.cosine_lobe(bands)[np.array([l for l, _ in lms])][:, None]
+        for array in (self.half_table, self.table_flat, self.source3, self.rot_index3, self.rot_index, self.lobe):
+            array.flags.writeable = False
+
+
+class SkySH:
+    """
+    SH lighting of the Preetham sky, per frame, from the fitted tables.
+
+    Create with :meth:`load`. Methods are read-only and thread-safe.
+
+    Examples
+    --------
+    >>> sky = SkySH.load()
+    >>> c = sky.coefficients(0.5, 3.0, sun_azimuth=1.0, bands=3)
+    >>> c.shape
+    (9, 3)
+    """
+
+    def __init__(self, sky_table: coefficient_file.SkyTable, path: Path | None = None) -> None:
+        sky_table.validate()
+        self.table: coefficient_file.SkyTable = sky_table
+        self.path: Path | None = path
+        self.bands: int = sky_table.bands
+        self.colourspace: str = sky_table.colourspace
+        self.metadata: dict[str, Any] = sky_table.metadata
+        self._plans: dict[tuple[int, bool], _Plan] = {
+            (n, g): _Plan(sky_table, n, g) for n in range(1, self.bands + 1) for g in (False, True)
+        }
+        self._colour_matrices: dict[str, NDArray[np.float64]] = {}
+
+    @classmethod
+    def load(cls, path: str | Path | None = None) -> "SkySH":
+        """Load the shipped coefficient file (or ``path``), checked (see :func:`skysh.coefficient_file.read`)."""
+        resolved = coefficient_file.default_path() if path is None else Path(path)
+        return cls(coefficient_file.read(resolved), resolved)
+
+    def __repr__(self) -> str:
+        return f"SkySH(bands={self.bands}, degrees={self.table.max_degrees}, colourspace={self.colourspace!r})"
+
+    # ------------------------------------------------------------------ #
+    def coefficients(
+        self,
+        sun_zenith: ArrayLike,
+        turbidity: ArrayLike,
+        sun_azimuth: ArrayLike = 0.0,
+        bands: int = 3,
+        gibbs: bool = True,
+        dering: bool = False,
+        irradiance: bool = False,
+        colourspace: str | None = None,
+    ) -> NDArray[np.float64]:
+        """
+        SH coefficients of the sky for one frame (or a batch).
+
+        Parameters
+        ----------
+        sun_zenith
+            Radians, [0, pi/2] (sun at the zenith to sun on the horizon).
+        turbidity
+            [2.5, 6], the fitted domain.
+        sun_azimuth
+            Radians, any finite value; from +X towards +Y.
+        bands
+            Number of SH bands N in [1, file bands] (7 in the shipped file).
+            3 bands suffice for diffuse (irradiance) lighting.
+        gibbs
+            Apply the zonal sinc filter of Habel eq. (5) with N = ``bands``.
+        dering
+            Window the result so the reconstructed irradiance is non-negative
+            (Sloan 2017; :func:`skysh.dering.dering`), after the Gibbs filter
+            and the rotation.
+        irradiance
+            Return irradiance coefficients (clamped-cosine convolution, lux
+            for the luminance) instead of radiance.
+        colourspace
+            colour-science RGB colourspace name for the result; default the
+            file's (linear sRGB). Exact, as SH are linear in colour.
+
+        Returns
+        -------
+        ndarray
+            (N * N, 3), or (..., N * N, 3) when the parameters are arrays
+            (broadcast together); radiance in cd/m^2 (R = G = B = Y for the
+            colourspace's white), linear RGB.
+
+        Raises
+        ------
+        ValueError
+            For a parameter outside its range (named, with the range), NaN or
+            inf, or ``bands`` outside [1, file bands]. Nothing is extrapolated.
+        """
+        if type(sun_zenith) is float and type(turbidity) is float and type(sun_azimuth) is float:
+            out = self._one(sun_zenith, turbidity, sun_azimuth, bands, gibbs)
+        else:
+            out = self._batch(sun_zenith, turbidity, sun_azimuth, bands, gibbs)
+        if dering:
+            from skysh.dering import dering as _dering  # imported on first use
+
+            out = _dering(out)[0]
+        if irradiance:
+            out = out * self._plans[(int(bands), True)].lobe
+        if colourspace is not None and colourspace != self.colourspace:
+            out = out @ self._colour_matrix(colourspace).T
+        return out
+
+    def _one(self, ts: float, t: float, phi: float, bands: Any, gibbs: bool) -> NDArray[np.float64]:
+        """Scalar fast path: floats only, arithmetic on precomputed tables."""
+        if not _ZMIN <= ts <= _ZMAX:  # also False for NaN
+            raise ValueError(f"sun_zenith must lie in [{_ZMIN:g}, {_ZMAX:g}] rad (the fitted domain), got {ts!r}")
+        if not _TMIN <= t <= _TMAX:
+            raise ValueError(f"turbidity must lie in [{_TMIN:g}, {_TMAX:g}] (the fitted domain), got {t!r}")
+        if not math.isfinite(phi):
+            raise ValueError(f"sun_azimuth must be finite (radians), got {phi!r}")
+        plan = self._plans.get((bands, bool(gibbs))) if type(bands) is int else None
+        if plan is None:
+            check_bands(bands, high=self.bands)
+            plan = self._plans[(int(bands), bool(gibbs))]
+        dx, dy = plan.degrees
+        # Chebyshev terms (the luminance scale folded into the turbidity ones) and the
+        # rotation factors, in Python floats, then one array: numpy calls are the cost here.
+        x = ts * _X_SCALE - _X_SHIFT
+        y = math.log(t) * _Y_SCALE - _Y_SHIFT
+        scale = _luminance_scale(ts, t)
+        values = [1.0, x]
+        for _ in range(dx - 1):
+            values.append(2.0 * x * values[-1] - values[-2])
+        values = values[: dx + 1]
+        ty = [scale, scale * y]
+        for _ in range(dy - 1):
+            ty.append(2.0 * y * ty[-1] - ty[-2])
+        values += ty[: dy + 1]
+        cos_phi, sin_phi = math.cos(phi), math.sin(phi)
+        cos_m, sin_m = [1.0], [0.0]
+        for _ in range(plan.bands - 1):  # cos / sin of m phi by complex multiplication
+            c, s = cos_m[-1], sin_m[-1]
+            cos_m.append(c * cos_phi - s * sin_phi)
+            sin_m.append(s * cos_phi + c * sin_phi)
+        packed = np.array(values + cos_m + sin_m)
+        half = packed[dx + 1 : dx + dy + 2] @ (packed[: dx + 1] @ plan.half_table).reshape(dy + 1, -1)
+        out = half[plan.source3] * packed[dx + dy + 2 :][plan.rot_index3]
+        return out.reshape(-1, 3)
+
+    def _batch(self, sun_zenith: ArrayLike, turbidity: ArrayLike, sun_azimuth: ArrayLike, bands: Any, gibbs: bool) -> NDArray:
+        """Array path: one design matrix, one matrix product, vectorised rotation."""
+        ts = check_range(sun_zenith, "sun_zenith", _ZMIN, _ZMAX, unit="rad (the fitted domain)")
+        t = check_range(turbidity, "turbidity", _TMIN, _TMAX, unit="(the fitted domain)")
+        phi = check_range(sun_azimuth, "sun_azimuth", -np.inf, np.inf, unit="rad")
+        bands = check_bands(bands, high=self.bands)
+        plan = self._plans[(bands, bool(gibbs))]
+        shape = np.broadcast_shapes(ts.shape, t.shape, phi.shape)
+        ts, t, phi = (np.broadcast_to(a, shape).ravel() for a in (ts, t, phi))
+        x, y = poly.scale(ts, t)
+        tx = poly.chebyshev(x, plan.degrees[0])
+        ty = poly.chebyshev(y, plan.degrees[1]) * _luminance_scale(ts, t, np)[:, None]
+        p = (tx[:, :, None] * ty[:, None, :]).reshape(ts.shape[0], -1)  # (n, T) design
+        out = (p @ plan.table_flat).reshape(-1, bands * bands, 3)  # the one matrix product
+        angle = phi[:, None] * np.arange(bands)
+        rot = np.concatenate([np.cos(angle), np.sin(angle)], axis=1)  # (n, 2N)
+        out *= np.take(rot, plan.rot_index, axis=1)[:, :, None]
+        return out.reshape(shape + (bands * bands, 3))
+
+    def _colour_matrix(self, colourspace: str) -> NDArray[np.float64]:
+        matrix = self._colour_matrices.get(colourspace)
+        if matrix is None:
+            from skysh.preetham import rgb_from_xyz_matrix  # colour-science loads here, on first use
+
+            source = rgb_from_xyz_matrix(self.colourspace)
+            matrix = rgb_from_xyz_matrix(colourspace) @ np.linalg.inv(source)
+            matrix.flags.writeable = False
+            self._colour_matrices[colourspace] = matrix
+        return matrix
+
+    # ------------------------------------------------------------------ #
+    def radiance(
+        self,
+        dirs: ArrayLike,
+        sun_zenith: float,
+        turbidity: float,
+        sun_azimuth: float = 0.0,
+        bands: int = 3,
+        gibbs: bool = True,
+        colourspace: str | None = None,
+    ) -> NDArray[np.float64]:
+        """Reconstructed sky radiance (cd/m^2, linear RGB) in the directions ``dirs`` (..., 3) -> (..., 3)."""
+        c = self.coefficients(sun_zenith, turbidity, sun_azimuth, bands, gibbs, colourspace=colourspace)
+        return sh.evaluate(c, dirs)
+
+    def irradiance_at(
+        self,
+        normals: ArrayLike,
+        sun_zenith: float,
+        turbidity: float,
+        sun_azimuth: float = 0.0,
+        bands: int = 3,
+        gibbs: bool = True,
+        dering: bool = False,
+        colourspace: str | None = None,
+    ) -> NDArray[np.float64]:
+        """Reconstructed irradiance (cd/m^2 x sr = lux for luminance) on surfaces with ``normals`` (..., 3) -> (..., 3)."""
+        c = self.coefficients(
+            sun_zenith, turbidity, sun_azimuth, bands, gibbs, dering=dering, irradiance=True, colourspace=colourspace
+        )
+        return sh.evaluate(c, normals)
