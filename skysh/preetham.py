@@ -154,9 +154,12 @@ def _zenith_luminance(ts: Any, t: Any, ops: Any = math) -> Any:
 
 def _luminance_scale(ts: Any, t: Any, ops: Any = math) -> Any:
     """Y_z / F_Y(0, ts) with ``ops`` = math or numpy; unchecked (see :func:`luminance_scale`)."""
-    a, b, c, d, e = (_PEREZ_Y_SLOPE[k] * t + _PEREZ_Y_INTERCEPT[k] for k in range(5))
+    slope, intercept = _PEREZ_Y_SLOPE, _PEREZ_Y_INTERCEPT
     cos_ts = ops.cos(ts)
-    f_zenith = (1.0 + a * ops.exp(b)) * (1.0 + c * ops.exp(d * ts) + e * cos_ts * cos_ts)
+    f_zenith = (1.0 + (slope[0] * t + intercept[0]) * ops.exp(slope[1] * t + intercept[1])) * (
+        1.0 + (slope[2] * t + intercept[2]) * ops.exp((slope[3] * t + intercept[3]) * ts)
+        + (slope[4] * t + intercept[4]) * cos_ts * cos_ts
+    )
     return _zenith_luminance(ts, t, ops) / f_zenith
 
 

@@ -13,10 +13,10 @@ N and Gibbs setting, one table whose zonal rows are pre-scaled by
 sinc(pi l / N) (the seed's own optimisation) and whose m < 0 columns repeat
 their m > 0 partners, so that the rotation is one multiplication by
 cos(|m| a) or sin(|m| a). A scalar call is then: validation on Python floats,
-two short Chebyshev recurrences and the rotation factors in Python floats
-(packed into one array), the luminance scale (one tan, two exp), two
-matrix-vector products over the m >= 0 table, and one gather-multiply that
-rotates (eq. 4) and fills the m < 0 coefficients. A batch is one design matrix,
+one vectorised cosine giving the Chebyshev terms (T_k(x) = cos(k acos x)) and
+the rotation factors, two matrix-vector products over the m >= 0 table, one
+gather-multiply that rotates (eq. 4) and fills the m < 0 coefficients, and
+the luminance scale (one tan, two exp). A batch is one design matrix,
 one matrix product over the full table and one multiplication by the rotation
 factors.
 
@@ -69,7 +69,10 @@ def gibbs_factors(bands: int) -> NDArray[np.float64]:
 class _Plan:
     """Precomputed arithmetic of one (bands, gibbs) setting."""
 
-    __slots__ = ("bands", "degrees", "half_table", "table_flat", "source3", "rot_index3", "rot_index", "lobe")
+    __slots__ = (
+        "bands", "degrees", "half_table", "table_flat", "source3", "rot_index3", "rot_index", "lobe",
+        "multiplier", "variable", "phase",
+    )
 
     def __init__(self, sky_table: coefficient_file.SkyTable, bands: int, gibbs: bool) -> None:
         self.bands = bands
@@ -102,7 +105,16 @@ class _Plan:
         # Batch path: the full table (m < 0 columns repeat their m > 0 partners).
         self.table_flat = np.ascontiguousarray(half[:, source].reshape(len(terms), k * 3))
         self.lobe = sh.cosine_lobe(bands)[np.array([l for l, _ in lms])][:, None]
-        for array in (self.half_table, self.table_flat, self.source3, self.rot_index3, self.rot_index, self.lobe):
+        # Scalar path: packed = cos(multiplier * angles[variable] - phase) with angles
+        # (acos x, acos y, phi) holds T_0..T_dx(x), T_0..T_dy(y), cos(m phi), sin(m phi).
+        dx, dy = self.degrees
+        self.multiplier = np.concatenate([np.arange(dx + 1), np.arange(dy + 1), np.arange(bands), np.arange(bands)]).astype(np.float64)
+        self.variable = np.concatenate([np.zeros(dx + 1), np.ones(dy + 1), np.full(2 * bands, 2)]).astype(np.intp)
+        self.phase = np.concatenate([np.zeros(dx + dy + 2 + bands), np.full(bands, 0.5 * math.pi)])
+        for array in (
+            self.half_table, self.table_flat, self.source3, self.rot_index3, self.rot_index, self.lobe,
+            self.multiplier, self.variable, self.phase,
+        ):
             array.flags.writeable = False
 
 
@@ -172,7 +184,13 @@ class SkySH:
         dering
             Window the result so the reconstructed irradiance is non-negative
             (Sloan 2017; :func:`skysh.dering.dering`), after the Gibbs filter
-            and the rotation.
+            and the rotation; one window for all channels, so colour does not
+            shift. For bands <= 3 the seed's conservative bound decides (tens
+            of microseconds); for 4 to 7 bands the numeric minimum
+            (:func:`skysh.dering.exact_min`) decides, which costs tens of
+            milliseconds per call: an offline or occasional operation. Sky
+            results of the shipped file already have non-negative 3-band
+            irradiance, so the window is the identity for them.
         irradiance
             Return irradiance coefficients (clamped-cosine convolution, lux
             for the luminance) instead of radiance.
@@ -220,28 +238,16 @@ class SkySH:
             check_bands(bands, high=self.bands)
             plan = self._plans[(int(bands), bool(gibbs))]
         dx, dy = plan.degrees
-        # Chebyshev terms (the luminance scale folded into the turbidity ones) and the
-        # rotation factors, in Python floats, then one array: numpy calls are the cost here.
-        x = ts * _X_SCALE - _X_SHIFT
-        y = math.log(t) * _Y_SCALE - _Y_SHIFT
-        scale = _luminance_scale(ts, t)
-        values = [1.0, x]
-        for _ in range(dx - 1):
-            values.append(2.0 * x * values[-1] - values[-2])
-        values = values[: dx + 1]
-        ty = [scale, scale * y]
-        for _ in range(dy - 1):
-            ty.append(2.0 * y * ty[-1] - ty[-2])
-        values += ty[: dy + 1]
-        cos_phi, sin_phi = math.cos(phi), math.sin(phi)
-        cos_m, sin_m = [1.0], [0.0]
-        for _ in range(plan.bands - 1):  # cos / sin of m phi by complex multiplication
-            c, s = cos_m[-1], sin_m[-1]
-            cos_m.append(c * cos_phi - s * sin_phi)
-            sin_m.append(s * cos_phi + c * sin_phi)
-        packed = np.array(values + cos_m + sin_m)
+        # Every per-call factor in one vectorised cos: the Chebyshev terms T_k(x) =
+        # cos(k acos x) of both variables and the rotation factors cos(m phi) and
+        # sin(m phi) = cos(m phi - pi/2). Error <= k^2 eps, far below the fit's.
+        x = min(1.0, max(-1.0, ts * _X_SCALE - _X_SHIFT))  # rounding at the domain edges
+        y = min(1.0, max(-1.0, math.log(t) * _Y_SCALE - _Y_SHIFT))
+        angles = np.array((math.acos(x), math.acos(y), phi))
+        packed = np.cos(plan.multiplier * angles[plan.variable] - plan.phase)
         half = packed[dx + 1 : dx + dy + 2] @ (packed[: dx + 1] @ plan.half_table).reshape(dy + 1, -1)
         out = half[plan.source3] * packed[dx + dy + 2 :][plan.rot_index3]
+        out *= _luminance_scale(ts, t)
         return out.reshape(-1, 3)
 
     def _batch(self, sun_zenith: ArrayLike, turbidity: ArrayLike, sun_azimuth: ArrayLike, bands: Any, gibbs: bool) -> NDArray:

@@ -1,0 +1,71 @@
+"""The wheel installs into a fresh virtual environment and runs there, data file included.
+
+The environment uses ``--system-site-packages`` so numpy, scipy and colour-science
+come from the test machine (no network needed); skysh itself is installed from the
+wheel only (``--no-deps --no-index``) and run from a directory outside the
+repository, so nothing can be imported from the source tree.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import venv
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture(scope="module")
+def installed(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Build the wheel, make a venv, install the wheel; return the venv's bin directory."""
+    base = tmp_path_factory.mktemp("install")
+    wheels = base / "wheels"
+    subprocess.run(
+        [sys.executable, "-m", "pip", "wheel", str(ROOT), "--no-deps", "--no-build-isolation", "-q", "-w", str(wheels)],
+        check=True, capture_output=True, text=True,
+    )
+    (wheel,) = wheels.glob("skysh-*.whl")
+    env_dir = base / "venv"
+    venv.EnvBuilder(system_site_packages=True, with_pip=True).create(env_dir)
+    bin_dir = env_dir / ("Scripts" if os.name == "nt" else "bin")
+    subprocess.run(
+        [str(bin_dir / "python"), "-m", "pip", "install", "--no-deps", "--no-index", "-q", str(wheel)],
+        check=True, capture_output=True, text=True,
+    )
+    return bin_dir
+
+
+def _clean_env() -> dict[str, str]:
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH",)}
+    return env
+
+
+class TestInstalledWheel:
+    def test_cli_runs_from_the_wheel(self, installed: Path, tmp_path: Path) -> None:
+        result = subprocess.run(
+            [str(installed / "skysh"), "coeffs", "--sun-zenith", "30", "--sun-azimuth", "45", "--turbidity", "3",
+             "--format", "json"],
+            cwd=tmp_path, env=_clean_env(), capture_output=True, text=True, check=True,
+        )
+        payload = json.loads(result.stdout)
+        coefficients = payload["coefficients"]
+        assert len(coefficients) == 9 and all(len(row) == 3 for row in coefficients)
+        assert coefficients[0][1] > 0.0  # the DC term of the sky is positive
+
+    def test_package_and_data_come_from_the_wheel(self, installed: Path, tmp_path: Path) -> None:
+        code = (
+            "import skysh, skysh.coefficient_file as f; from skysh import SkySH; "
+            "s = SkySH.load(); print(skysh.__file__); print(f.default_path())"
+        )
+        result = subprocess.run(
+            [str(installed / "python"), "-c", code], cwd=tmp_path, env=_clean_env(), capture_output=True, text=True,
+            check=True,
+        )
+        package_file, data_file = result.stdout.split()
+        assert str(ROOT) not in package_file, "skysh was imported from the source tree, not the wheel"
+        assert Path(data_file).name == "preetham_sh.npz" and str(ROOT) not in data_file
