@@ -52,6 +52,7 @@ __all__ = [
     "FitSettings",
     "chebyshev_grid",
     "held_out_points",
+    "edge_points",
     "project_points",
     "error_denominator",
     "fit_table",
@@ -114,6 +115,15 @@ def held_out_points(count: int, seed: int, corners: bool = True) -> tuple[NDArra
     if corners:
         ts = np.concatenate([ts, np.repeat(poly.SUN_ZENITH_DOMAIN, 2)])
         tu = np.concatenate([tu, np.tile(poly.TURBIDITY_DOMAIN, 2)])
+    return ts, tu
+
+
+def edge_points(per_edge: int, seed: int) -> tuple[NDArray, NDArray]:
+    """``per_edge`` uniform random points on each of the domain's four edges (seeded)."""
+    u = np.random.default_rng(seed).uniform(0.0, 1.0, (4, per_edge))
+    (lo_s, hi_s), (lo_t, hi_t) = poly.SUN_ZENITH_DOMAIN, poly.TURBIDITY_DOMAIN
+    ts = np.concatenate([lo_s + (hi_s - lo_s) * u[0], lo_s + (hi_s - lo_s) * u[1], np.full(per_edge, lo_s), np.full(per_edge, hi_s)])
+    tu = np.concatenate([np.full(per_edge, lo_t), np.full(per_edge, hi_t), lo_t + (hi_t - lo_t) * u[2], lo_t + (hi_t - lo_t) * u[3]])
     return ts, tu
 
 
@@ -358,7 +368,11 @@ def build(
     points_ts = np.concatenate([grid_ts, test_ts])
     points_tu = np.concatenate([grid_tu, test_tu])
     if tolerance is not None:
-        val_ts, val_tu = held_out_points(settings.validation, settings.seed + 1, corners=False)
+        # Validation: random interior points, the corners and random points on the
+        # four edges, since the worst errors sit on the boundary (sun on the horizon).
+        val_ts, val_tu = held_out_points(settings.validation, settings.seed + 1, corners=True)
+        edge_ts, edge_tu = edge_points(6, settings.seed + 2)
+        val_ts, val_tu = np.concatenate([val_ts, edge_ts]), np.concatenate([val_tu, edge_tu])
         points_ts = np.concatenate([points_ts, val_ts])
         points_tu = np.concatenate([points_tu, val_tu])
     coeffs, lmin = project_points(points_ts, points_tu, settings, mapper)

@@ -89,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from tqdm import tqdm
 
-    total = grid[0] * grid[1] + settings.held_out + 4 + (settings.validation if args.tolerance else 0)
+    total = grid[0] * grid[1] + settings.held_out + 4 + (settings.validation + 4 + 24 if args.tolerance else 0)
     start = time.perf_counter()
     with ProcessPoolExecutor(max(1, args.jobs)) as pool:
         bar = tqdm(total=total, desc="projecting the sky", unit="sky", disable=args.no_progress, file=sys.stderr)
