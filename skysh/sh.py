@@ -148,7 +148,7 @@ def _recurrence(bands: int) -> _Recurrence:
     return _Recurrence(bands, diag, a, b)
 
 
-_BLOCK: int = 2048
+_BLOCK: int = 4096
 """Points per block of the basis recurrence: its working set (about 4 rows per band
 of this many doubles) then stays in cache, which makes it several times faster."""
 
