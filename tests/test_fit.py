@@ -1,0 +1,308 @@
+"""
+Tests of :mod:`skysh.fit`
+=========================
+
+The fit is checked on data it must reproduce exactly: coefficients that ARE
+``luminance_scale(ts, T)`` times a 2D Chebyshev polynomial in the variables of
+:func:`skysh.poly.scale`, evaluated here with
+:func:`numpy.polynomial.chebyshev.chebval2d` (an independent route). Least
+squares on such data has zero residual, so the fitted table must equal the
+polynomial's coefficients to rounding, and the smallest degrees that meet any
+small budget are the true ones. The whole pipeline (:func:`skysh.fit.build`)
+runs once on synthetic projections (through its ``mapper`` hook) and once,
+tiny, on the real sky.
+
+One class per public function; every tolerance is a named constant with the
+reason for its size.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from numpy.polynomial import chebyshev as npcheb
+
+from skysh import coefficient_file, fit, poly, preetham, sh
+from skysh.runtime import SkySH
+
+EPS: float = float(np.finfo(np.float64).eps)
+"""Machine epsilon of float64, 2.2e-16."""
+
+CONDITION_MAX: float = 1e3
+"""Largest condition number of a weighted design accepted for the exact-recovery
+tests: the tiny Chebyshev-node grids give about 3.5 (measured) with point
+weights in [0.5, 2]; the bound keeps FIT_EXACT_RTOL meaningful."""
+
+FIT_EXACT_RTOL: float = 1e-12
+"""Recovered Chebyshev coefficients vs the true ones, relative to the largest
+|coefficient|. For consistent data (zero residual) the least-squares solution's
+relative error is about condition x eps (not condition^2), i.e. <= 1e3 x 2.2e-16
+= 2.2e-13 with CONDITION_MAX; measured 1.1e-15 at condition 3.5."""
+
+EVAL_RTOL: float = 1e-12
+"""evaluate_table vs chebval2d at held-out points, relative to the largest
+|value|: the table's rounding (FIT_EXACT_RTOL) times sum |T_i T_j| <= 12 terms
+of size <= 1, plus Clenshaw vs recurrence rounding (~k^2 eps); measured 1.5e-15."""
+
+EXACT_BUDGET: float = 1e-8
+"""E_mean budget for choose_degrees on exact polynomial data: far above the
+rounding of an exact fit (~1e-14 relative) and far below the error of any
+degree that misses a true term (the top coefficient is >= 1 against an L_min
+of the same size, so leaving it out costs E_mean of order 1)."""
+
+HALF_PI = math.pi / 2.0
+
+# --------------------------------------------------------------------------- #
+# Synthetic polynomial sky
+# --------------------------------------------------------------------------- #
+TRUE_DEGREES: np.ndarray = np.array([[1, 0], [3, 2], [2, 1]], dtype=np.int64)
+"""True per-band (d_theta, d_tau) of the synthetic data: lower than MAX_DEGREES and different per band."""
+
+MAX_DEGREES: tuple[int, int] = (5, 3)
+"""The degrees choose_degrees may go up to."""
+
+GRID: tuple[int, int] = (8, 5)
+"""A tiny Chebyshev grid, larger than MAX_DEGREES + 1 in each variable (so every candidate fit is determined)."""
+
+
+def _chebyshev_variables(ts: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """x affine in the sun zenith, y affine in log(turbidity), both onto [-1, 1] (typed from the file's basis text)."""
+    x = 4.0 * np.asarray(ts, dtype=float) / math.pi - 1.0
+    y = (2.0 * np.log(t) - math.log(2.5) - math.log(6.0)) / (math.log(6.0) - math.log(2.5))
+    return x, y
+
+
+class PolynomialSky:
+    """Coefficients (m >= 0 rows) that are exactly luminance_scale x a Chebyshev polynomial of TRUE_DEGREES."""
+
+    def __init__(self, seed: int = 5) -> None:
+        rng = np.random.default_rng(seed)
+        self.bands = TRUE_DEGREES.shape[0]
+        self.layout = coefficient_file.zonal_half_layout(self.bands)
+        within = tuple(int(v) for v in TRUE_DEGREES.max(axis=0))
+        self.within = within
+        # p[row, channel, i, j]: coefficient of T_i(x) T_j(y)
+        self.p = np.zeros((len(self.layout), 3, within[0] + 1, within[1] + 1))
+        for row, (l, _) in enumerate(self.layout):
+            d0, d1 = TRUE_DEGREES[l]
+            self.p[row, :, : d0 + 1, : d1 + 1] = rng.normal(size=(3, d0 + 1, d1 + 1))
+            self.p[row, :, d0, d1] = 1.0 + np.abs(self.p[row, :, d0, d1])  # the top term matters
+            self.p[row, :, 0, 0] += 4.0
+
+    def table(self) -> np.ndarray:
+        """The true table in the file's layout: (n_terms, K_half, 3), term (i, j) at i (d_tau + 1) + j."""
+        return self.p.transpose(2, 3, 0, 1).reshape(-1, len(self.layout), 3)
+
+    def values(self, ts: np.ndarray, t: np.ndarray) -> np.ndarray:
+        """(P, K_half, 3) coefficients in cd/m^2."""
+        x, y = _chebyshev_variables(ts, t)
+        scale = preetham.luminance_scale(ts, t)
+        out = np.empty((np.size(ts), len(self.layout), 3))
+        for row in range(len(self.layout)):
+            for c in range(3):
+                out[:, row, c] = npcheb.chebval2d(x, y, self.p[row, c]) * scale
+        return out
+
+    def denominator(self, ts: np.ndarray, t: np.ndarray, rng: np.random.Generator | None = None) -> np.ndarray:
+        """(P, 3) an L_min of the size of the coefficients; randomised weights if ``rng``."""
+        base = preetham.luminance_scale(ts, t)[:, None] * np.ones((1, 3))
+        return base if rng is None else base * rng.uniform(0.5, 2.0, base.shape)
+
+
+@pytest.fixture(scope="module")
+def psky() -> PolynomialSky:
+    return PolynomialSky()
+
+
+# --------------------------------------------------------------------------- #
+# Grids and points
+# --------------------------------------------------------------------------- #
+class TestChebyshevGrid:
+    def test_nodes(self) -> None:
+        ts, t = fit.chebyshev_grid((6, 4))
+        assert ts.shape == t.shape == (24,)
+        # Chebyshev-Gauss nodes cos((2k + 1) pi / (2n)) mapped affinely, interior only.
+        expected_ts = np.sort(HALF_PI * 0.5 * (np.cos((2 * np.arange(6) + 1) * math.pi / 12) + 1.0))
+        expected_t = np.sort(2.5 + 3.5 * 0.5 * (np.cos((2 * np.arange(4) + 1) * math.pi / 8) + 1.0))
+        np.testing.assert_allclose(np.unique(ts), expected_ts, rtol=0, atol=8 * EPS)
+        np.testing.assert_allclose(np.unique(t), expected_t, rtol=0, atol=32 * EPS)
+        assert ts.min() > 0.0 and ts.max() < HALF_PI and t.min() > 2.5 and t.max() < 6.0
+        # The product grid: each zenith node with each turbidity node (ij order).
+        assert np.all(ts.reshape(6, 4) == ts.reshape(6, 4)[:, :1])
+
+
+class TestHeldOutPoints:
+    def test_random_plus_corners(self) -> None:
+        ts, t = fit.held_out_points(10, 3)
+        assert ts.shape == t.shape == (14,)
+        assert np.all((ts >= 0) & (ts <= HALF_PI) & (t >= 2.5) & (t <= 6.0))
+        assert set(zip(ts[-4:], t[-4:])) == {(0.0, 2.5), (0.0, 6.0), (HALF_PI, 2.5), (HALF_PI, 6.0)}
+        np.testing.assert_array_equal(fit.held_out_points(10, 3)[0], ts)  # seeded
+        assert fit.held_out_points(10, 3, corners=False)[0].shape == (10,)
+
+    def test_edge_points(self) -> None:
+        ts, t = fit.edge_points(5, 1)
+        assert ts.shape == t.shape == (20,)
+        on_edge = np.isin(ts, [0.0, HALF_PI]) | np.isin(t, [2.5, 6.0])
+        assert on_edge.all()
+
+
+# --------------------------------------------------------------------------- #
+# Fit and evaluation
+# --------------------------------------------------------------------------- #
+class TestFitTable:
+    def test_recovers_polynomial_exactly(self, psky: PolynomialSky) -> None:
+        ts, t = fit.chebyshev_grid(GRID)
+        rng = np.random.default_rng(11)
+        table, condition = fit.fit_table(ts, t, psky.values(ts, t), psky.denominator(ts, t, rng), TRUE_DEGREES)
+        assert 1.0 <= condition < CONDITION_MAX, condition
+        truth = psky.table()
+        assert table.shape == truth.shape == (poly.n_terms(psky.within), 6, 3)
+        np.testing.assert_allclose(table, truth, rtol=0, atol=FIT_EXACT_RTOL * np.abs(truth).max())
+        # Terms above a band's degrees are exactly zero in its rows (the file's layout promise).
+        for row, (l, _) in enumerate(psky.layout):
+            i, j = np.divmod(np.arange(table.shape[0]), psky.within[1] + 1)
+            above = (i > TRUE_DEGREES[l, 0]) | (j > TRUE_DEGREES[l, 1])
+            assert np.all(table[above, row] == 0.0)
+
+    def test_evaluate_table_reproduces(self, psky: PolynomialSky) -> None:
+        ts, t = fit.chebyshev_grid(GRID)
+        table, _ = fit.fit_table(ts, t, psky.values(ts, t), psky.denominator(ts, t), TRUE_DEGREES)
+        hts, ht = fit.held_out_points(16, 2)
+        got = fit.evaluate_table(table, TRUE_DEGREES, hts, ht)
+        expected = psky.values(hts, ht)
+        assert got.shape == (20, 6, 3)
+        np.testing.assert_allclose(got, expected, rtol=0, atol=EVAL_RTOL * np.abs(expected).max())
+        # And with the true table directly (no fit involved).
+        direct = fit.evaluate_table(psky.table(), TRUE_DEGREES, hts, ht)
+        np.testing.assert_allclose(direct, expected, rtol=0, atol=EVAL_RTOL * np.abs(expected).max())
+
+    def test_weights_do_not_matter_for_exact_data(self, psky: PolynomialSky) -> None:
+        ts, t = fit.chebyshev_grid(GRID)
+        a, _ = fit.fit_table(ts, t, psky.values(ts, t), psky.denominator(ts, t), TRUE_DEGREES)
+        b, _ = fit.fit_table(ts, t, psky.values(ts, t), psky.denominator(ts, t, np.random.default_rng(1)), TRUE_DEGREES)
+        np.testing.assert_allclose(a, b, rtol=0, atol=2 * FIT_EXACT_RTOL * np.abs(a).max())
+
+    def test_plain_variant_recovers_plain_polynomial(self) -> None:
+        # variant (False, False): the seed's plain polynomial (no scale, turbidity affine).
+        ts, t = fit.chebyshev_grid(GRID)
+        x = 4.0 * ts / math.pi - 1.0
+        y = (2.0 * t - 8.5) / 3.5
+        p = np.random.default_rng(4).normal(size=(3, 3))  # degrees (2, 2)
+        values = np.repeat(npcheb.chebval2d(x, y, p)[:, None, None], 3, axis=2)  # bands 1, one row
+        table, condition = fit.fit_table(ts, t, values, np.ones((ts.size, 3)), np.array([[2, 2]]), variant=(False, False))
+        assert condition < CONDITION_MAX
+        np.testing.assert_allclose(table[:, 0, 1], p.ravel(), rtol=0, atol=FIT_EXACT_RTOL * np.abs(p).max())
+
+
+class TestErrorMeasures:
+    def test_definitions(self) -> None:
+        # Seed eqs. (2), (3): E_max = sum |diff| / L_min, E_mean = sqrt(sum diff^2) / L_min,
+        # worst channel; over the first `bands` bands (K_half = bands (bands + 1) / 2 rows).
+        truth = np.zeros((1, 6, 3))
+        truth[0, 0] = [10.0, 20.0, 40.0]
+        predicted = truth.copy()
+        predicted[0, 0] += [1.0, 0.0, 0.0]  # band 0
+        predicted[0, 1] += [0.0, 3.0, 0.0]  # band 1
+        predicted[0, 2] += [0.0, -4.0, 0.0]  # band 1
+        predicted[0, 5] += [0.0, 0.0, 100.0]  # band 2
+        denominator = np.array([[2.0, 10.0, 50.0]])
+        one = fit.error_measures(predicted, truth, denominator, 1)
+        assert one["e_mean"][0] == pytest.approx(0.5) and one["e_max"][0] == pytest.approx(0.5)
+        assert one["dc"][0] == pytest.approx(0.1)
+        two = fit.error_measures(predicted, truth, denominator, 2)
+        assert two["e_mean"][0] == pytest.approx(0.5)  # channel 1: 5 / 10; channel 0: 1 / 2
+        assert two["e_max"][0] == pytest.approx(0.7)  # channel 1: 7 / 10
+        three = fit.error_measures(predicted, truth, denominator, 3)
+        assert three["e_mean"][0] == pytest.approx(2.0) and three["e_max"][0] == pytest.approx(2.0)
+
+    def test_error_denominator_floor(self) -> None:
+        lmin = np.array([[100.0, 50.0, -700.0, 1000.0]])
+        np.testing.assert_array_equal(fit.error_denominator(lmin), [[100.0, 50.0, fit.LMIN_FLOOR * 1000.0]])
+
+
+class TestChooseDegrees:
+    def test_picks_true_degrees(self, psky: PolynomialSky) -> None:
+        gts, gt = fit.chebyshev_grid(GRID)
+        vts, vt = fit.held_out_points(12, 9)
+        grid = (gts, gt, psky.values(gts, gt), psky.denominator(gts, gt))
+        validation = (vts, vt, psky.values(vts, vt), psky.denominator(vts, vt))
+        chosen = fit.choose_degrees(EXACT_BUDGET, psky.bands, MAX_DEGREES, grid, validation)
+        np.testing.assert_array_equal(chosen, TRUE_DEGREES)
+
+    def test_unreachable_budget_gives_max(self, psky: PolynomialSky) -> None:
+        # Data of higher degree than allowed: no candidate meets the budget.
+        gts, gt = fit.chebyshev_grid(GRID)
+        vts, vt = fit.held_out_points(12, 9)
+        grid = (gts, gt, psky.values(gts, gt), psky.denominator(gts, gt))
+        validation = (vts, vt, psky.values(vts, vt), psky.denominator(vts, vt))
+        chosen = fit.choose_degrees(EXACT_BUDGET, psky.bands, (2, 1), grid, validation)
+        np.testing.assert_array_equal(chosen, [[1, 0], [2, 1], [2, 1]])
+
+
+# --------------------------------------------------------------------------- #
+# The whole pipeline
+# --------------------------------------------------------------------------- #
+class TestBuild:
+    def test_synthetic_pipeline(self, psky: PolynomialSky, tmp_path: Path) -> None:
+        """build() with projections replaced by the polynomial sky (its mapper hook): exact results."""
+
+        def mapper(function, jobs):
+            jobs = list(jobs)
+            ts = np.array([j[0] for j in jobs])
+            t = np.array([j[1] for j in jobs])
+            values = psky.values(ts, t)
+            lmin = np.concatenate([psky.denominator(ts, t), preetham.luminance_scale(ts, t)[:, None]], axis=1)
+            return [(values[k], lmin[k]) for k in range(len(jobs))]
+
+        settings = fit.FitSettings(bands=3, degrees=MAX_DEGREES, grid=GRID, held_out=8, validation=8)
+        table, report, samples = fit.build(settings, tolerance=EXACT_BUDGET, mapper=mapper, provenance={"test": True})
+        np.testing.assert_array_equal(table.degrees, TRUE_DEGREES)
+        truth = psky.table()
+        np.testing.assert_allclose(table.table, truth, rtol=0, atol=FIT_EXACT_RTOL * np.abs(truth).max())
+        assert report["held_out_points"] == 12
+        for bands in ("1", "2", "3"):
+            assert report["by_bands"][bands]["e_mean_worst"] < EXACT_BUDGET
+        assert table.metadata["errors"] == report and table.metadata["test"] is True
+        assert table.metadata["degrees"] == TRUE_DEGREES.tolist()
+        assert samples["grid"][2].shape == (GRID[0] * GRID[1], 6, 3)
+        # The runtime built from this table evaluates the same polynomial.
+        path = coefficient_file.write(tmp_path / "synthetic.npz", table)
+        runtime = SkySH.load(path)
+        got = runtime.coefficients(0.9, 3.3, 0.0, bands=3, gibbs=False)
+        expected = psky.values(np.array([0.9]), np.array([3.3]))[0]
+        rows = [sh.index(l, m) for l, m in psky.layout]
+        np.testing.assert_allclose(got[rows], expected, rtol=0, atol=EVAL_RTOL * np.abs(expected).max())
+
+    def test_tiny_real_build(self, tmp_path: Path) -> None:
+        """The real sky on a tiny grid: self-consistent report, file and runtime (no accuracy claim)."""
+        settings = fit.FitSettings(bands=2, degrees=(3, 2), grid=(6, 4), held_out=3)
+        table, report, samples = fit.build(settings)
+        assert table.table.shape == (12, 3, 3) and table.degrees.tolist() == [[3, 2], [3, 2]]
+        hts, ht, hc, hd = samples["test"]
+        assert hts.size == report["held_out_points"] == 7
+        predicted = fit.evaluate_table(table.table, table.degrees, hts, ht)
+        measures = fit.error_measures(predicted, hc, hd, 2)
+        assert report["by_bands"]["2"]["e_mean_worst"] == pytest.approx(float(measures["e_mean"].max()), rel=1e-12)
+        # The held-out truth is the reference projection.
+        np.testing.assert_array_equal(hc[0], preetham.sky_sh(float(hts[0]), float(ht[0]), 2)[[0, 2, 3]])
+        # Round trip through the file, then the runtime equals evaluate_table (phi = 0, no Gibbs).
+        runtime = SkySH.load(coefficient_file.write(tmp_path / "tiny.npz", table))
+        got = runtime.coefficients(hts, ht, 0.0, bands=2, gibbs=False)[:, [0, 2, 3]]
+        np.testing.assert_allclose(got, predicted, rtol=0, atol=EVAL_RTOL * np.abs(predicted).max())
+
+    def test_compare_variants_rows(self, psky: PolynomialSky) -> None:
+        gts, gt = fit.chebyshev_grid(GRID)
+        hts, ht = fit.held_out_points(6, 1)
+        samples = {"grid": (gts, gt, psky.values(gts, gt), psky.denominator(gts, gt)),
+                   "test": (hts, ht, psky.values(hts, ht), psky.denominator(hts, ht))}
+        rows = fit.compare_variants(samples, (3, 2), 3)
+        assert [r["variant"] for r in rows] == list(fit.VARIANTS)
+        shipped = rows[-1]
+        assert shipped["variant"] == "both (shipped)"
+        # The shipped form represents this data exactly; the others cannot.
+        assert shipped["e_mean_worst_3"] < EXACT_BUDGET
+        assert all(r["e_mean_worst_3"] > 1e3 * EXACT_BUDGET for r in rows[:-1])
