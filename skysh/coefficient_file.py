@@ -127,6 +127,16 @@ class SkyTable:
             raise CoefficientFileError(f"table must have shape {expected} for degrees {degrees.tolist()}, got {self.table.shape}")
         if not np.all(np.isfinite(self.table)):
             raise CoefficientFileError("table holds NaN or inf")
+        # Layout promise: terms above a band's own degrees are zero in its rows.
+        within = self.max_degrees
+        i, j = np.meshgrid(np.arange(within[0] + 1), np.arange(within[1] + 1), indexing="ij")
+        i, j = i.ravel(), j.ravel()
+        for row, (l, _) in enumerate(zonal_half_layout(self.bands)):
+            outside = (i > degrees[l, 0]) | (j > degrees[l, 1])
+            if np.any(self.table[outside, row] != 0.0):
+                raise CoefficientFileError(
+                    f"table has non-zero terms above the degrees {degrees[l].tolist()} of band {l}: degrees and table disagree"
+                )
 
 
 def default_path() -> Path:
@@ -176,18 +186,27 @@ def read(path: str | Path | None = None) -> SkyTable:
     """
     path = default_path() if path is None else Path(path)
     try:
-        with np.load(path, allow_pickle=False) as data:
-            entries = {key: data[key] for key in data.files}
+        with open(path, "rb") as handle:
+            if not zipfile.is_zipfile(handle):
+                raise CoefficientFileError(f"{path} is not a readable coefficient file (truncated or not an npz)")
+            handle.seek(0)
+            with np.load(handle, allow_pickle=False) as data:
+                entries = {key: data[key] for key in data.files}
     except FileNotFoundError as error:
         raise CoefficientFileError(f"coefficient file not found: {path}") from error
     except (zipfile.BadZipFile, EOFError, OSError, ValueError) as error:
+        if isinstance(error, CoefficientFileError):
+            raise
         raise CoefficientFileError(f"{path} is not a readable coefficient file (truncated or not an npz): {error}") from error
     missing = {"format", "format_version", "table", "degrees", "metadata"} - set(entries)
     if missing:
         raise CoefficientFileError(f"{path} lacks the entries {sorted(missing)}; is it a skysh coefficient file?")
     if str(entries["format"]) != FORMAT:
         raise CoefficientFileError(f"{path} has format {str(entries['format'])!r}, expected {FORMAT!r}")
-    version = int(entries["format_version"])
+    raw_version = entries["format_version"]
+    if raw_version.shape != () or raw_version.dtype.kind not in "iu":
+        raise CoefficientFileError(f"{path} has a malformed format version {raw_version.tolist()!r}; expected the integer {FORMAT_VERSION}")
+    version = int(raw_version)
     if version != FORMAT_VERSION:
         raise CoefficientFileError(
             f"{path} has format version {version}; this skysh reads version {FORMAT_VERSION} only "
@@ -197,11 +216,17 @@ def read(path: str | Path | None = None) -> SkyTable:
         metadata = json.loads(str(entries["metadata"]))
     except json.JSONDecodeError as error:
         raise CoefficientFileError(f"{path} has unreadable metadata: {error}") from error
+    if not isinstance(metadata, dict):
+        raise CoefficientFileError(f"{path} has metadata that is not a JSON object")
+    table, degrees = entries["table"], entries["degrees"]
+    if table.dtype.kind != "f" or degrees.dtype.kind not in "iu":
+        raise CoefficientFileError(f"{path}: table must be floating point and degrees integers, got {table.dtype} and {degrees.dtype}")
     sky_table = SkyTable(
-        table=np.asarray(entries["table"], dtype=np.float64),
-        degrees=np.asarray(entries["degrees"], dtype=np.int64),
-        metadata=metadata,
+        table=np.asarray(table, dtype=np.float64), degrees=np.asarray(degrees, dtype=np.int64), metadata=metadata
     )
-    sky_table.validate()
+    try:
+        sky_table.validate()
+    except CoefficientFileError as error:
+        raise CoefficientFileError(f"{path}: {error}") from None
     sky_table.table.flags.writeable = False
     return sky_table

@@ -258,6 +258,8 @@ class SkySH:
         bands = check_bands(bands, high=self.bands)
         plan = self._plans[(bands, bool(gibbs))]
         shape = np.broadcast_shapes(ts.shape, t.shape, phi.shape)
+        if 0 in shape:
+            return np.zeros(shape + (bands * bands, 3))
         ts, t, phi = (np.broadcast_to(a, shape).ravel() for a in (ts, t, phi))
         x, y = poly.scale(ts, t)
         tx = poly.chebyshev(x, plan.degrees[0])

@@ -1,0 +1,136 @@
+"""
+Cost of the per-frame runtime against the arithmetic it cannot avoid
+=====================================================================
+
+:meth:`skysh.SkySH.coefficients` evaluates 2D Chebyshev polynomials (Habel 2008,
+eq. 1) for every SH coefficient: at heart one (n_terms,) x (n_terms, 3 N^2)
+product. This script measures the runtime against that product, side by side
+in one run, so the ratios do not depend on the machine's speed:
+
+1.  ``single``: one call ``sky.coefficients(0.5, 3.0, 1.0, bands=N)`` (Python
+    floats: the scalar fast path) vs one numpy product ``v @ A`` with
+    ``A`` of shape (112, 3 N^2) (112 = terms of degree (13, 7); (112, 147) at
+    N = 7). Target: ratio <= 3.
+2.  ``batch``: one call with arrays of 10^5 parameter sets vs the batched
+    product ``(10^5, 112) @ (112, 3 N^2)`` alone. Target: ratio <= 1.5.
+3.  ``reference``: one call vs :func:`skysh.preetham.sky_sh` (the converged
+    quadrature projection the fit was made from). Target: >= 10^4 times faster.
+
+Each for N = 7 (the file's maximum) and N = 3 (diffuse lighting). Every timing
+is the best of ``--repeats`` runs after a warm-up (:mod:`timeit`, with the loop
+count chosen so one run lasts about 0.2 s). Timings are wall time: on a loaded
+machine run it a few times and compare. Targets are reported, never enforced:
+the script always exits 0.
+
+Output, one JSON object per line::
+
+    {"bench": "single", "bands": 7, "runtime_s": ..., "baseline": "v @ A (112, 147)",
+     "baseline_s": ..., "ratio": ..., "target": "ratio <= 3", "met": true}
+
+Run: ``PYTHONPATH=. python benchmarks/bench_runtime.py [--repeats 7] [--batch 100000]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import platform
+import timeit
+from typing import Callable
+
+import numpy as np
+
+from skysh import preetham
+from skysh.runtime import SkySH
+
+BANDS: tuple[int, ...] = (7, 3)
+"""Band counts measured: the file's maximum and the diffuse-lighting choice."""
+
+TARGETS: dict[str, tuple[str, float]] = {
+    "single": ("<=", 3.0),
+    "batch": ("<=", 1.5),
+    "reference": (">=", 1e4),
+}
+"""Target per benchmark: runtime / baseline <= x, or baseline / runtime >= x (speed-up)."""
+
+RUN_SECONDS: float = 0.2
+"""Approximate length of one timed run; the loop count is chosen to reach it."""
+
+
+def best_per_call(fn: Callable[[], object], repeats: int, run_seconds: float = RUN_SECONDS) -> float:
+    """Best seconds per call of ``fn`` over ``repeats`` timed runs, after a warm-up run."""
+    timer = timeit.Timer(fn)
+    number, elapsed = timer.autorange()  # also the warm-up
+    number = max(1, math.ceil(number * run_seconds / max(elapsed, 1e-9)))
+    return min(timer.repeat(repeat=repeats, number=number)) / number
+
+
+def emit(bench: str, bands: int, runtime_s: float, baseline: str, baseline_s: float, **extra: object) -> None:
+    op, target = TARGETS[bench]
+    if op == "<=":
+        value = runtime_s / baseline_s
+        record = {"ratio": value}
+    else:
+        value = baseline_s / runtime_s
+        record = {"speedup": value}
+    met = value <= target if op == "<=" else value >= target
+    line = {
+        "bench": bench, "bands": bands, "runtime_s": runtime_s, "baseline": baseline, "baseline_s": baseline_s,
+        **record, "target": f"{next(iter(record))} {op} {target:g}", "met": bool(met), **extra,
+    }
+    print(json.dumps(line), flush=True)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[1])
+    parser.add_argument("--repeats", type=int, default=7, help="timed runs per measurement (best is kept)")
+    parser.add_argument("--batch", type=int, default=100_000, help="parameter sets in the batched call")
+    parser.add_argument("--reference-repeats", type=int, default=3, help="timed sky_sh calls (each ~20 ms)")
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args(argv)
+
+    sky = SkySH.load()
+    n_terms = (sky.table.max_degrees[0] + 1) * (sky.table.max_degrees[1] + 1)
+    print(json.dumps({
+        "bench": "environment", "python": platform.python_version(), "numpy": np.__version__,
+        "cpus": os.cpu_count(), "loadavg_1min": os.getloadavg()[0] if hasattr(os, "getloadavg") else None,
+        "file_degrees": list(sky.table.max_degrees), "n_terms": n_terms, "repeats": args.repeats,
+        "batch": args.batch,
+    }), flush=True)
+
+    rng = np.random.default_rng(args.seed)
+    ts = rng.uniform(0.0, math.pi / 2.0, args.batch)
+    tu = rng.uniform(2.5, 6.0, args.batch)
+    phi = rng.uniform(-math.pi, math.pi, args.batch)
+    design = rng.standard_normal((args.batch, n_terms))
+    vector = rng.standard_normal(n_terms)
+
+    for bands in BANDS:
+        columns = 3 * bands * bands
+        matrix = rng.standard_normal((n_terms, columns))
+
+        # 1. one scalar call vs one matrix-vector product
+        call = best_per_call(lambda: sky.coefficients(0.5, 3.0, 1.0, bands=bands), args.repeats)
+        matvec = best_per_call(lambda: vector @ matrix, args.repeats)
+        emit("single", bands, call, f"v @ A ({n_terms}, {columns})", matvec)
+
+        # 2. one batched call vs the batched product alone
+        batch = best_per_call(lambda: sky.coefficients(ts, tu, phi, bands=bands), args.repeats, run_seconds=0.0)
+        matmul = best_per_call(lambda: design @ matrix, args.repeats, run_seconds=0.0)
+        emit("batch", bands, batch, f"({args.batch}, {n_terms}) @ ({n_terms}, {columns})", matmul,
+             per_frame_s=batch / args.batch)
+
+        # 3. one call vs the reference projection
+        preetham.sky_sh(0.5, 3.0, bands, sun_azimuth=1.0)  # warm-up: colour-science import, caches
+        reference = min(
+            timeit.repeat(lambda: preetham.sky_sh(0.5, 3.0, bands, sun_azimuth=1.0), repeat=args.reference_repeats,
+                          number=1)
+        )
+        emit("reference", bands, call, f"preetham.sky_sh(bands={bands})", reference)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
