@@ -155,7 +155,7 @@ def build_parser() -> argparse.ArgumentParser:
     coeffs.add_argument("--format", choices=COEFF_FORMATS, default="table", help="table (default; labelled rows, units), json, csv, or a constant array for glsl, hlsl (float32) or c (double)")
     coeffs.add_argument("--colourspace", metavar="NAME", default=None, help="colour-science RGB colourspace name, e.g. 'ITU-R BT.2020', 'ACEScg'; default linear sRGB (other names load colour-science, about 1.5 s)")
     units = coeffs.add_mutually_exclusive_group()
-    units.add_argument("--exposure", type=_positive, metavar="X", help="multiply every coefficient by X > 0 (units become cd/m^2 x X)")
+    units.add_argument("--exposure", type=_positive, metavar="X", help="multiply every coefficient by X > 0 (the units are multiplied by X)")
     units.add_argument("--normalise", action="store_true", help=_NORMALISE_HELP)
     coeffs.set_defaults(handler=_cmd_coeffs)
 

@@ -27,7 +27,7 @@ def installed(tmp_path_factory: pytest.TempPathFactory) -> Path:
     wheels = base / "wheels"
     subprocess.run(
         [sys.executable, "-m", "pip", "wheel", str(ROOT), "--no-deps", "--no-build-isolation", "-q", "-w", str(wheels)],
-        check=True, capture_output=True, text=True,
+        check=True, capture_output=True, text=True, env=_clean_env(),
     )
     (wheel,) = wheels.glob("skysh-*.whl")
     env_dir = base / "venv"
@@ -35,7 +35,7 @@ def installed(tmp_path_factory: pytest.TempPathFactory) -> Path:
     bin_dir = env_dir / ("Scripts" if os.name == "nt" else "bin")
     subprocess.run(
         [str(bin_dir / "python"), "-m", "pip", "install", "--no-deps", "--no-index", "-q", str(wheel)],
-        check=True, capture_output=True, text=True,
+        check=True, capture_output=True, text=True, env=_clean_env(), cwd=base,
     )
     return bin_dir
 
