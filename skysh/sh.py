@@ -234,7 +234,8 @@ def basis(dirs: ArrayLike, bands: int) -> NDArray[np.float64]:
     bands = check_bands(bands, high=MAX_BANDS)
     d = check_dirs(dirs)
     flat = d.reshape(-1, 3)
-    out = _basis_kn(flat[:, 0], flat[:, 1], flat[:, 2], bands)
+    x, y, z = np.ascontiguousarray(flat.T)  # contiguous coordinate rows: the recurrence runs on them
+    out = _basis_kn(x, y, z, bands)
     return np.moveaxis(out.reshape((bands * bands,) + d.shape[:-1]), 0, -1)
 
 
