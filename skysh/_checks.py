@@ -21,8 +21,11 @@ __all__ = ["as_float_array", "check_range", "check_dirs", "check_bands", "check_
 
 def as_float_array(value: ArrayLike, name: str) -> NDArray[np.float64]:
     """Return ``value`` as a float64 array, refusing NaN and inf with a ValueError."""
+    raw = np.asarray(value)
+    if raw.dtype.kind not in "iuf":  # no text, booleans, objects or complex numbers
+        raise ValueError(f"{name} must be a real number or array of them, got {value!r}")
     try:
-        array = np.asarray(value, dtype=np.float64)
+        array = np.asarray(raw, dtype=np.float64)
     except (TypeError, ValueError) as error:
         raise ValueError(f"{name} must be a real number or array of them, got {value!r}") from error
     if not np.all(np.isfinite(array)):

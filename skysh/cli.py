@@ -445,6 +445,7 @@ def _run_tool(command: str, argv: list[str]) -> int:
     spec = importlib.util.spec_from_file_location(f"skysh_tools_{path.stem}", path)
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses (and pickling for process pools) look modules up here
     saved = sys.argv
     sys.argv = [f"skysh {command}"] + argv  # so the tool's --help names the command
     try:

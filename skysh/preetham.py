@@ -223,7 +223,7 @@ def xyY(dirs: ArrayLike, sun_zenith: float, sun_azimuth: float, turbidity: float
     """
     d = check_dirs(dirs)
     ts, t = _check_sun(sun_zenith, turbidity)
-    phi_s = float(check_range(sun_azimuth, "sun_azimuth", -1e6, 1e6, unit="rad"))
+    phi_s = math.fmod(float(check_range(sun_azimuth, "sun_azimuth", -math.inf, math.inf, unit="rad")), 2.0 * math.pi)
     if ts.ndim or t.ndim:
         raise ValueError("sun_zenith and turbidity must be scalars here (use the runtime for batches)")
     ts, t = float(ts), float(t)
@@ -389,7 +389,7 @@ def sky_sh(
     check_choice(method, "method", sh.PROJECTION_METHODS)
     ts, t = _check_sun(sun_zenith, turbidity)
     ts, t = float(ts), float(t)
-    azimuth = float(check_range(sun_azimuth, "sun_azimuth", -1e6, 1e6, unit="rad"))
+    azimuth = math.fmod(float(check_range(sun_azimuth, "sun_azimuth", -math.inf, math.inf, unit="rad")), 2.0 * math.pi)
     if n is not None and (isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1):
         raise ValueError(f"n must be a positive integer, got {n!r}")
     rgb_from_xyz_matrix(colourspace)  # validate the name before the projection

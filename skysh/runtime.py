@@ -52,6 +52,7 @@ _LOG_T: tuple[float, float] = (math.log(poly.TURBIDITY_DOMAIN[0]), math.log(poly
 _Y_SCALE: float = 2.0 / (_LOG_T[1] - _LOG_T[0])
 _Y_SHIFT: float = (_LOG_T[0] + _LOG_T[1]) / (_LOG_T[1] - _LOG_T[0])
 _ZMIN, _ZMAX = poly.SUN_ZENITH_DOMAIN
+_TWO_PI: float = 2.0 * math.pi
 _TMIN, _TMAX = poly.TURBIDITY_DOMAIN
 
 
@@ -181,6 +182,11 @@ class SkySH:
             3 bands suffice for diffuse (irradiance) lighting.
         gibbs
             Apply the zonal sinc filter of Habel eq. (5) with N = ``bands``.
+            It suppresses the ringing of the *radiance* below the horizon,
+            but it also blurs: for 3-band irradiance the worst error against
+            the true sky grows from about 6% to 37% of the mean irradiance
+            (``tools/error_report.py``, section 9). For diffuse lighting
+            prefer ``gibbs=False, dering=True``.
         dering
             Window the result so the reconstructed irradiance is non-negative
             (Sloan 2017; :func:`skysh.dering.dering`), after the Gibbs filter
@@ -188,9 +194,10 @@ class SkySH:
             shift. For bands <= 3 the seed's conservative bound decides (tens
             of microseconds); for 4 to 7 bands the numeric minimum
             (:func:`skysh.dering.exact_min`) decides, which costs tens of
-            milliseconds per call: an offline or occasional operation. Sky
-            results of the shipped file already have non-negative 3-band
-            irradiance, so the window is the identity for them.
+            milliseconds per call: an offline or occasional operation. With
+            the Gibbs filter on, the shipped sky's 3-band irradiance is
+            already non-negative (the window is then the identity); without
+            it most skies need a window (the error report, section 5).
         irradiance
             Return irradiance coefficients (clamped-cosine convolution, lux
             for the luminance) instead of radiance.
@@ -233,6 +240,7 @@ class SkySH:
             raise ValueError(f"turbidity must lie in [{_TMIN:g}, {_TMAX:g}] (the fitted domain), got {t!r}")
         if not math.isfinite(phi):
             raise ValueError(f"sun_azimuth must be finite (radians), got {phi!r}")
+        phi = math.fmod(phi, _TWO_PI)  # so m * phi cannot overflow
         plan = self._plans.get((bands, bool(gibbs))) if type(bands) is int else None
         if plan is None:
             check_bands(bands, high=self.bands)
@@ -266,7 +274,7 @@ class SkySH:
         ty = poly.chebyshev(y, plan.degrees[1]) * _luminance_scale(ts, t, np)[:, None]
         p = (tx[:, :, None] * ty[:, None, :]).reshape(ts.shape[0], -1)  # (n, T) design
         out = (p @ plan.table_flat).reshape(-1, bands * bands, 3)  # the one matrix product
-        angle = phi[:, None] * np.arange(bands)
+        angle = np.fmod(phi, _TWO_PI)[:, None] * np.arange(bands)  # reduced: m * phi cannot overflow
         rot = np.concatenate([np.cos(angle), np.sin(angle)], axis=1)  # (n, 2N)
         out *= np.take(rot, plan.rot_index, axis=1)[:, :, None]
         return out.reshape(shape + (bands * bands, 3))

@@ -734,7 +734,7 @@ def section_fit(ctx: Context) -> Section:
     g = ctx.memo("grids", lambda: grids(ctx))
     sw = ctx.memo("sweep", lambda: sweep(ctx))
     errs = ctx.memo("shipped", lambda: shipped_errors(ctx))
-    ts, tu, truth, lmin = g["test"]
+    ts, tu = g["test"][:2]
     zen, tur = g["axes"]
     shape = plan.test_grid
     by, floored = errs["by"], errs["floored"]
