@@ -435,8 +435,8 @@ def sky_minimum(sun_zenith: float, turbidity: float, colourspace: str = "sRGB") 
     A 2-degree grid over zenith [0, 90] x azimuth [0, 180] degrees (the sky is
     symmetric about its sun's vertical plane), then two local grids of 41 x 41
     nodes around the best node, each 20 times finer (final spacing 0.005
-    degrees; the sky is smooth at its minimum, so the value is then exact to
-    about 1e-9 relative). Deterministic and vectorised. An RGB channel can be
+    degrees; the sky is smooth at its minimum, so the remaining error is
+    second order in that spacing). Deterministic and vectorised. An RGB channel can be
     negative: near sunset at low turbidity the sky's chromaticity leaves the
     sRGB gamut (blue about -700 cd/m^2 at sun_zenith = pi/2, turbidity 2.5).
     """
