@@ -14,6 +14,11 @@ Reference values are published numbers, each cited where it is used:
     March 20 and June solstice at 20:51 UTC on June 20.
 -   IAU 2006 precession (Capitaine et al. 2003): mean obliquity
     eps_A = 84381.406" - 46.836769" T.
+
+The SPA and USNO numbers were checked (2026-11-23) against the expected output
+printed in the comments of NREL's ``spa_tester.c`` (zenith 50.111622 deg,
+azimuth 194.340241 deg) and against the USNO 2024 table as quoted in several
+independent public code bases.
 """
 
 from __future__ import annotations
