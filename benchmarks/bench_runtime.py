@@ -21,7 +21,8 @@ in one run, so the ratios do not depend on the machine's speed:
 
 Each for N = 7 (the file's maximum) and N = 3 (diffuse lighting). Every timing
 is the best of ``--repeats`` runs after a warm-up (:mod:`timeit`, with the loop
-count chosen so one run lasts about 0.2 s). Timings are wall time: on a loaded
+count chosen so one run lasts about 0.2 s); the runtime and its baseline take
+turns within each round, so both see the same load. Timings are wall time: on a loaded
 machine run it a few times and compare. Targets are reported, never enforced:
 the script always exits 0.
 
@@ -62,12 +63,25 @@ RUN_SECONDS: float = 0.2
 """Approximate length of one timed run; the loop count is chosen to reach it."""
 
 
-def best_per_call(fn: Callable[[], object], repeats: int, run_seconds: float = RUN_SECONDS) -> float:
-    """Best seconds per call of ``fn`` over ``repeats`` timed runs, after a warm-up run."""
-    timer = timeit.Timer(fn)
-    number, elapsed = timer.autorange()  # also the warm-up
-    number = max(1, math.ceil(number * run_seconds / max(elapsed, 1e-9)))
-    return min(timer.repeat(repeat=repeats, number=number)) / number
+def interleaved_best(cases: dict[str, Callable[[], object]], repeats: int,
+                     run_seconds: float = RUN_SECONDS) -> dict[str, float]:
+    """
+    Best seconds per call of every case over ``repeats`` rounds; within a round the
+    cases take turns, so a change in the machine's load hits numerator and
+    denominator alike. Each case's loop count is set once (after a warm-up) so
+    that one timed run lasts about ``run_seconds`` (at least one call).
+    """
+    timers, numbers = {}, {}
+    for name, fn in cases.items():
+        timer = timeit.Timer(fn)
+        number, elapsed = timer.autorange()  # also the warm-up
+        timers[name] = timer
+        numbers[name] = max(1, math.ceil(number * run_seconds / max(elapsed, 1e-9)))
+    best = {name: math.inf for name in cases}
+    for _ in range(repeats):
+        for name, timer in timers.items():
+            best[name] = min(best[name], timer.timeit(numbers[name]) / numbers[name])
+    return best
 
 
 def emit(bench: str, bands: int, runtime_s: float, baseline: str, baseline_s: float, **extra: object) -> None:
@@ -114,17 +128,23 @@ def main(argv: list[str] | None = None) -> int:
         columns = 3 * bands * bands
         matrix = rng.standard_normal((n_terms, columns))
 
-        # 1. one scalar call vs one matrix-vector product
-        call = best_per_call(lambda: sky.coefficients(0.5, 3.0, 1.0, bands=bands), args.repeats)
-        # The floor: numpy's cheapest matrix-vector product (np.dot has less per-call overhead than @).
-        matvec = min(best_per_call(lambda: vector @ matrix, args.repeats),
-                     best_per_call(lambda: np.dot(vector, matrix), args.repeats))
-        emit("single", bands, call, f"min(v @ A, np.dot(v, A)), A ({n_terms}, {columns})", matvec)
+        # 1. one scalar call vs one matrix-vector product. The floor: numpy's cheapest
+        # matrix-vector product (np.dot has less per-call overhead than @).
+        t = interleaved_best({
+            "call": lambda: sky.coefficients(0.5, 3.0, 1.0, bands=bands),
+            "@": lambda: vector @ matrix,
+            "dot": lambda: np.dot(vector, matrix),
+        }, args.repeats)
+        call = t["call"]
+        emit("single", bands, call, f"min(v @ A, np.dot(v, A)), A ({n_terms}, {columns})", min(t["@"], t["dot"]))
 
         # 2. one batched call vs the batched product alone
-        batch = best_per_call(lambda: sky.coefficients(ts, tu, phi, bands=bands), args.repeats, run_seconds=0.0)
-        matmul = best_per_call(lambda: design @ matrix, args.repeats, run_seconds=0.0)
-        emit("batch", bands, batch, f"({args.batch}, {n_terms}) @ ({n_terms}, {columns})", matmul,
+        t = interleaved_best({
+            "batch": lambda: sky.coefficients(ts, tu, phi, bands=bands),
+            "matmul": lambda: design @ matrix,
+        }, args.repeats, run_seconds=0.0)
+        batch = t["batch"]
+        emit("batch", bands, batch, f"({args.batch}, {n_terms}) @ ({n_terms}, {columns})", t["matmul"],
              per_frame_s=batch / args.batch)
 
         # 3. one call vs the reference projection

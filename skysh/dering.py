@@ -498,9 +498,10 @@ _TINY: float = 1e-300
 
 _SCALAR_CHANNELS: int = 8
 """Inputs of up to 8 channels in all (one RGB function, with room for a few more) take the
-scalar :mod:`math` path of :func:`min_bound` and :func:`dering`: numpy's per-call cost
-(about 0.5 us per operation on this size, some 100 operations per bound) exceeds the
-scalar arithmetic (about 5 us per channel) up to about 10 channels."""
+scalar :mod:`math` path of :func:`min_bound` and :func:`dering`: for so few channels
+numpy's fixed cost per call (some 100 array operations per bound) exceeds the scalar
+arithmetic, which grows with the channels (``benchmarks/bench_dering.py`` prints the
+single-input costs of ``min_bound`` and ``dering`` and ``dering``'s per-item cost in a batch)."""
 
 
 def _check_coeffs(coeffs: ArrayLike, name: str = "coeffs") -> tuple[NDArray[np.float64], bool, int]:
