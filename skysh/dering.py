@@ -1199,6 +1199,31 @@ def _search(
     return tau, failed
 
 
+_SAFE_EXPONENTS: tuple[int, int] = (-960, 1000)
+"""Binary exponents (``np.frexp``) of coefficients that :func:`dering` decides on as given:
+|c| in about [1e-289, 1e301]. Beyond, the kernel's factor pi could overflow to inf and
+sums of subnormal values lose their digits, so :func:`_exactly_rescaled` first scales
+every (function, channel) by a power of two."""
+
+
+_SAFE_SCALES: tuple[float, float] = (2.0**-960, 2.0**1000)
+"""The same range for the largest |coefficient| of one channel after the kernel, on the scalar path."""
+
+
+def _exactly_rescaled(flat: NDArray) -> NDArray:
+    """``flat`` (n, K, C), or a copy with every (function, channel) divided by a power of two
+    near its largest |coefficient| when any coefficient lies outside :data:`_SAFE_EXPONENTS`.
+
+    Exact (powers of two), and every decision of :func:`dering` is invariant under a
+    positive scale per channel, so the windows are those of the unscaled input.
+    """
+    exponents = np.frexp(flat)[1]
+    if flat.size == 0 or _SAFE_EXPONENTS[0] <= exponents.min() and exponents.max() <= _SAFE_EXPONENTS[1]:
+        return flat
+    largest = np.frexp(np.max(np.abs(flat), axis=-2))[1]  # (n, C); 0 for a zero channel
+    return np.ldexp(flat, -largest[:, None, :])
+
+
 def dering(
     coeffs: ArrayLike,
     target: str = "irradiance",
@@ -1303,11 +1328,11 @@ def dering(
         tgt = None  # one function: the scalar path applies the kernel itself
         tau, failed, scales = _search_single(flat[0], target, path)
         if failed is not None and failed[0]:  # see below
-            tgt = flat * _KERNELS[target][l_of][:, None]
+            tgt = _exactly_rescaled(flat) * _KERNELS[target][l_of][:, None]  # decisions; output scales flat
             tau, failed = _search_exact(tgt, path, l_of)
             scales = None
     else:
-        tgt = flat * _KERNELS[target][l_of][:, None]
+        tgt = _exactly_rescaled(flat) * _KERNELS[target][l_of][:, None]  # decisions; output scales flat
         if bands == 3 and method != "exact":
             tau, failed = _search_bound(tgt, path)
             if failed is not None and failed.any():
@@ -1327,7 +1352,7 @@ def dering(
         if failed.any():
             # Warn only beyond rounding: the exact search rejects any negative value.
             idx = np.flatnonzero(failed)
-            size = np.abs(tgt[idx]).sum(axis=-2) + _TINY
+            size = np.abs(tgt[idx]).sum(axis=-2)  # no absolute floor: tgt is of order one or zero
             failed[idx] = (exact_min(tgt[idx] * scales[idx][:, l_of, None]) < -_FAIL_TOL * size).any(axis=-1)
             if failed.any():
                 warnings.warn(
@@ -1417,14 +1442,19 @@ def _search_single(
     early-out passes unwindowed; scales None when nothing passed (failed).
     """
     k0, k1, k2 = _KERNEL_FLOATS[target]
-    parts = [
-        _parts_scalar([k0 * f0, k1 * f1, k1 * f2, k1 * f3, k2 * f4, k2 * f5, k2 * f6, k2 * f7, k2 * f8])[0]
-        for f0, f1, f2, f3, f4, f5, f6, f7, f8 in coeffs.T.tolist()
-    ]
+    parts = []
+    for f in coeffs.T.tolist():
+        f0, f1, f2, f3, f4, f5, f6, f7, f8 = f
+        part, scale = _parts_scalar([k0 * f0, k1 * f1, k1 * f2, k1 * f3, k2 * f4, k2 * f5, k2 * f6, k2 * f7, k2 * f8])
+        if not _SAFE_SCALES[0] <= scale <= _SAFE_SCALES[1]:  # extreme (or zero) channel: as _exactly_rescaled
+            shift = -math.frexp(max(map(abs, f)))[1]
+            f0, f1, f2, f3, f4, f5, f6, f7, f8 = (math.ldexp(x, shift) for x in f)
+            part = _parts_scalar([k0 * f0, k1 * f1, k1 * f2, k1 * f3, k2 * f4, k2 * f5, k2 * f6, k2 * f7, k2 * f8])[0]
+        parts.append(part)
     quick = True
     for dc, b, zon, t, s in parts:  # the seed's early-out, as in _cheap_bound
         a, c = 1.5 * zon + t, dc - 0.5 * zon - t
-        if min(c - b * b / (4.0 * max(a, 0.5 * b) + _TINY), c + a - b) - 0.5 * s < 0.0:
+        if not min(c - b * b / (4.0 * max(a, 0.5 * b) + _TINY), c + a - b) - 0.5 * s >= 0.0:  # NaN fails
             quick = False
             break
     if quick:
