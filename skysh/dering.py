@@ -1206,8 +1206,9 @@ sums of subnormal values lose their digits, so :func:`_exactly_rescaled` first s
 every (function, channel) by a power of two."""
 
 
-_SAFE_SCALES: tuple[float, float] = (2.0**-960, 2.0**1000)
-"""The same range for the largest |coefficient| of one channel after the kernel, on the scalar path."""
+_SAFE_SCALES: tuple[float, float] = (math.ldexp(1.0, _SAFE_EXPONENTS[0]), math.ldexp(1.0, _SAFE_EXPONENTS[1]))
+""":data:`_SAFE_EXPONENTS` as magnitudes: the range for the largest |coefficient| of one
+channel after the kernel, on the scalar path."""
 
 
 def _exactly_rescaled(flat: NDArray) -> NDArray:
