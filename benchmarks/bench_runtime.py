@@ -14,7 +14,10 @@ in one run, so the ratios do not depend on the machine's speed:
     per-call overhead, so the floor is the honest one). Target: ratio <= 3.
 2.  ``batch``: one call with arrays of 10^5 parameter sets vs the batched
     product ``(10^5, 112) @ (112, 3 N^2)`` alone. Target: ratio <= 1.5.
-3.  ``reference``: one call vs :func:`skysh.preetham.sky_sh` (the converged
+3.  ``scalar_types``: one 3-band call with an int turbidity, numpy float64
+    parameters and 0-d arrays vs the same call with Python floats (every real
+    scalar takes the fast path). Target: ratio <= 1.3 each.
+4.  ``reference``: one call vs :func:`skysh.preetham.sky_sh` (the converged
     quadrature projection the fit was made from). Target: >= 10^4 times faster.
     ``batched_speedup`` adds, for context, the same ratio per evaluation inside
     the batch of case 2 (not the target's measure).
@@ -56,6 +59,7 @@ TARGETS: dict[str, tuple[str, float]] = {
     "single": ("<=", 3.0),
     "batch": ("<=", 1.5),
     "reference": (">=", 1e4),
+    "scalar_types": ("<=", 1.3),
 }
 """Target per benchmark: runtime / baseline <= x, or baseline / runtime >= x (speed-up)."""
 
@@ -123,6 +127,18 @@ def main(argv: list[str] | None = None) -> int:
     phi = rng.uniform(-math.pi, math.pi, args.batch)
     design = rng.standard_normal((args.batch, n_terms))
     vector = rng.standard_normal(n_terms)
+
+    # scalar types: ints, numpy float64 and 0-d arrays must take the fast path
+    f64 = (np.float64(0.5), np.float64(3.0), np.float64(1.0))
+    zero_d = (np.array(0.5), np.array(3.0), np.array(1.0))
+    t = interleaved_best({
+        "float": lambda: sky.coefficients(0.5, 3.0, 1.0),
+        "int": lambda: sky.coefficients(0.5, 3, 1),
+        "float64": lambda: sky.coefficients(*f64),
+        "0-d": lambda: sky.coefficients(*zero_d),
+    }, args.repeats)
+    for name in ("int", "float64", "0-d"):
+        emit("scalar_types", 3, t[name], "the same call with Python floats", t["float"], kind=name)
 
     for bands in BANDS:
         columns = 3 * bands * bands

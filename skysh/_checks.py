@@ -6,6 +6,7 @@ Input checks shared by every public function of skysh
 -   :func:`check_range`: refuse values outside a closed interval, naming the parameter.
 -   :func:`check_dirs`: refuse direction arrays that are not (..., 3).
 -   :func:`check_bands`: refuse a band count outside [1, max].
+-   :func:`check_flag`: refuse anything but ``bool`` / ``numpy.bool_`` (a TypeError).
 
 Every failure is a :class:`ValueError` whose message names the parameter and the
 valid range, so a user can fix the call without reading the source.
@@ -16,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["as_float_array", "check_range", "check_dirs", "check_bands", "check_choice"]
+__all__ = ["as_float_array", "check_range", "check_dirs", "check_bands", "check_flag", "check_choice"]
 
 
 def as_float_array(value: ArrayLike, name: str) -> NDArray[np.float64]:
@@ -69,3 +70,16 @@ def check_choice(value: str, name: str, choices: tuple[str, ...]) -> str:
     if value not in choices:
         raise ValueError(f"{name} must be one of {', '.join(map(repr, choices))}, got {value!r}")
     return value
+
+
+def check_flag(value: object, name: str) -> bool:
+    """Return ``value`` as a bool; refuse anything but ``bool`` and ``numpy.bool_`` with a TypeError naming it.
+
+    Truthiness is not accepted: ``"False"`` and ``nan`` are true in Python, so a flag
+    given as text or a number would silently mean the opposite of what was meant.
+    """
+    if type(value) is bool:
+        return value  # type: ignore[return-value]
+    if type(value) is np.bool_:
+        return bool(value)
+    raise TypeError(f"{name} must be a bool (True or False), got {value!r} of type {type(value).__name__}")

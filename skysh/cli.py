@@ -148,9 +148,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_sun(coeffs)
     coeffs.add_argument("--bands", type=_bands, default=3, metavar="N", help="SH bands N, [1, 7] (the shipped file's); default 3 (9 coefficients)")
-    coeffs.add_argument("--irradiance", action="store_true", help="irradiance coefficients (clamped-cosine convolution), cd/m^2*sr")
-    coeffs.add_argument("--dering", action="store_true", help="window the coefficients so the reconstructed irradiance is never negative (Sloan 2017)")
-    coeffs.add_argument("--no-gibbs", action="store_true", help="skip the zonal sinc Gibbs filter (Habel eq. 5), applied by default")
+    coeffs.add_argument("--irradiance", action="store_true", help="irradiance coefficients E (clamped-cosine convolution), cd/m^2*sr (lux for the luminance)")
+    coeffs.add_argument("--gibbs", action=argparse.BooleanOptionalAction, default=None, help="the zonal sinc Gibbs filter (Habel eq. 5); default: on for radiance, off for irradiance and engine presets (it blurs diffuse light)")
+    coeffs.add_argument("--dering", action=argparse.BooleanOptionalAction, default=None, help="window the coefficients so the reconstructed irradiance is never negative (Sloan 2017); default: on for irradiance and engine presets, off for radiance")
     coeffs.add_argument("--up", choices=("z", "y"), default="z", help="frame of the output: z (default, skysh's Z up) or y (right-handed Y up as glTF: zenith +Y, +X stays, +Y becomes -Z; skysh.sh.to_y_up)")
     coeffs.add_argument("--format", choices=COEFF_FORMATS, default="table", help="table (default; labelled rows, units), json, csv, or a constant array for glsl, hlsl (float32) or c (double)")
     coeffs.add_argument("--colourspace", metavar="NAME", default=None, help="colour-science RGB colourspace name, e.g. 'ITU-R BT.2020', 'ACEScg'; default linear sRGB (other names load colour-science, about 1.5 s)")
@@ -346,8 +346,11 @@ def _cmd_coeffs(args: argparse.Namespace) -> int:
 
     sky = SkySH.load()
     _check_bands(args.bands, sky)
+    diffuse = args.irradiance
+    gibbs = not diffuse if args.gibbs is None else args.gibbs
+    dering = diffuse if args.dering is None else args.dering
     c = sky.coefficients(
-        sun_zenith, args.turbidity, sun_azimuth, bands=args.bands, gibbs=not args.no_gibbs, dering=args.dering,
+        sun_zenith, args.turbidity, sun_azimuth, bands=args.bands, gibbs=gibbs, dering=dering,
         irradiance=args.irradiance, colourspace=args.colourspace,
     )
     if args.up == "y":
@@ -370,8 +373,8 @@ def _cmd_coeffs(args: argparse.Namespace) -> int:
         "sun_zenith_rad": sun_zenith,
         "sun_azimuth_rad": sun_azimuth,
         "turbidity": args.turbidity,
-        "gibbs": not args.no_gibbs,
-        "dering": args.dering,
+        "gibbs": gibbs,
+        "dering": dering,
         "up": args.up,
         "units": units,
         "scale": scale,

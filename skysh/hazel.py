@@ -16,7 +16,7 @@ average direction, ``|R1| <= R0``) and a symmetric traceless 3x3 matrix
     Shortley) coefficients <-> (R0, R1, R2).
 -   :func:`radiance`: ``R0 + 3 R1.w + (15/2) w R2 w``.
 -   :func:`irradiance`: ``I(n) = R0 + 2 R1.n + (15/8) n R2 n``, the seed's
-    irradiance ``I = E / pi`` (E the cosine-weighted integral of CONVENTIONS.md;
+    irradiance ``I = E / pi`` (E the cosine-weighted integral of docs/conventions.md;
     I is the radiance leaving a white Lambertian surface).
 -   :func:`geomerics_parameters`, :func:`irradiance_l1_nonlinear`: the
     non-linear L1 irradiance of Geomerics (CEDEC 2015), which is never negative.
@@ -28,7 +28,7 @@ average direction, ``|R1| <= R0``) and a symmetric traceless 3x3 matrix
 
 Conversion at the boundary (Condon-Shortley signs)
 --------------------------------------------------
-With ``c_i = integral R Y_i dw`` and the table of CONVENTIONS.md
+With ``c_i = integral R Y_i dw`` and the table of docs/conventions.md
 (``Y(1, -1) = -k1 y``, ``Y(1, 0) = k1 z``, ``Y(1, 1) = -k1 x``, ``k1 =
 sqrt(3) / (2 sqrt(pi))``; ``Y(2, -2) = k2 x y``, ``Y(2, -1) = -k2 y z``,
 ``Y(2, 1) = -k2 x z``, ``Y(2, 2) = (k2 / 2)(x^2 - y^2)``, ``Y(2, 0) = (3
@@ -399,7 +399,7 @@ def irradiance(coeffs: ArrayLike, normals: ArrayLike) -> NDArray[np.float64]:
     Returns
     -------
     ndarray
-        ``I = E / pi`` (E the clamped-cosine integral of CONVENTIONS.md): the
+        ``I = E / pi`` (E the clamped-cosine integral of docs/conventions.md): the
         radiance of a white Lambertian surface, in the coefficients' unit
         (cd/m^2 for sky radiance). Equal to ``sh.evaluate(sh.irradiance(c)) /
         pi`` to rounding. Negative where the band-limited irradiance rings.

@@ -15,7 +15,7 @@ matplotlib is not needed (nor imported). The true sky comes from
 :func:`skysh.preetham.radiance`, so rendering imports colour-science.
 
 Panel layout: column x covers azimuth phi from -180 degrees (left edge) to
-+180 degrees (right edge), from +X towards +Y as in ``CONVENTIONS.md``; row y
++180 degrees (right edge), from +X towards +Y as in ``docs/conventions.md``; row y
 covers the zenith angle theta from 0 (top) to 180 degrees (bottom), so the
 horizon is the middle row. The irradiance panel shows E(n) / pi for the
 surface normal n of each pixel: the radiance of a white Lambertian surface, in
@@ -166,7 +166,9 @@ def render_image(
     width
         Width of each panel in pixels, [16, 4096]; panels are width // 2 high.
     gibbs
-        Apply the zonal Gibbs filter (Habel eq. 5).
+        Apply the zonal Gibbs filter (Habel eq. 5) to the reconstruction. The
+        irradiance panel always uses the runtime's irradiance defaults (no
+        filter, deringing on: what an engine should light diffuse surfaces with).
 
     Returns
     -------
@@ -188,7 +190,7 @@ def render_image(
     dirs = latlong_dirs(width)
     truth = preetham.radiance(dirs, sun_zenith, sun_azimuth, turbidity, colourspace=sky.colourspace)
     reconstruction = sh.evaluate(coefficients, dirs)
-    irradiance = sh.evaluate(sh.irradiance(coefficients), dirs) / math.pi
+    irradiance = sh.evaluate(sky.coefficients(sun_zenith, turbidity, sun_azimuth, bands=bands, irradiance=True), dirs) / math.pi
 
     upper = dirs[..., 2] > 0.0
     weight = np.broadcast_to(np.sin(np.arccos(np.clip(dirs[..., 2], -1.0, 1.0))), upper.shape)[upper]

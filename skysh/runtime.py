@@ -41,7 +41,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from skysh import coefficient_file, poly, sh
-from skysh._checks import check_bands, check_range
+from skysh._checks import check_bands, check_flag, check_range
 from skysh.preetham import _luminance_scale
 
 __all__ = ["SkySH", "gibbs_factors"]
@@ -88,6 +88,30 @@ def _rotation_factors(phi: NDArray[np.float64], bands: int) -> NDArray[np.float6
         np.multiply(rot[bands + m - 1], c1, out=rot[bands + m])
         rot[bands + m] += rot[m - 1] * s1  # sin(m a) = sin((m-1) a) cos a + cos((m-1) a) sin a
     return rot.T
+
+
+_REAL_SCALAR_TYPES: frozenset[type] = frozenset(
+    {int, np.float64, np.float32, np.float16, np.int64, np.int32, np.int16, np.int8,
+     np.uint64, np.uint32, np.uint16, np.uint8}
+)
+"""Scalar types (besides float) that take the scalar fast path; ``bool`` is not a number here."""
+
+
+def _real_scalar(value: Any) -> float | None:
+    """``value`` as a Python float when it is one real scalar (float, int, numpy real, 0-d array), else None.
+
+    None sends the call to the array path, which validates and names the parameter
+    (also for ints too large for a float, text and booleans).
+    """
+    kind = type(value)
+    if kind is float:
+        return value  # type: ignore[no-any-return]
+    if kind in _REAL_SCALAR_TYPES or (kind is np.ndarray and value.ndim == 0 and value.dtype.kind in "iuf"):
+        try:
+            return float(value)
+        except OverflowError:  # an int beyond float range: the array path refuses it by name
+            return None
+    return None
 
 
 class _Plan:
@@ -188,8 +212,8 @@ class SkySH:
         turbidity: ArrayLike,
         sun_azimuth: ArrayLike = 0.0,
         bands: int = 3,
-        gibbs: bool = True,
-        dering: bool = False,
+        gibbs: bool | None = None,
+        dering: bool | None = None,
         irradiance: bool = False,
         colourspace: str | None = None,
     ) -> NDArray[np.float64]:
@@ -209,25 +233,21 @@ class SkySH:
             3 bands suffice for diffuse (irradiance) lighting.
         gibbs
             Apply the zonal sinc filter of Habel eq. (5) with N = ``bands``.
-            It suppresses the ringing of the *radiance* below the horizon,
-            but it also blurs: for 3-band irradiance the worst error against
-            the true sky grows from about 6% to 37% of the mean irradiance
-            (``tools/error_report.py``, section 9). For diffuse lighting
-            prefer ``gibbs=False, dering=True``.
+            Default (None): by intent, on for radiance, off for irradiance.
+            The filter halves the *radiance*'s ringing below the horizon but
+            blurs: 3-band irradiance with it is far from the true sky's
+            (the README's "Defaults" table, printed by
+            ``python tools/error_report.py --sections 9``).
         dering
             Window the result so the reconstructed irradiance is non-negative
             (Sloan 2017; :func:`skysh.dering.dering`), after the Gibbs filter
             and the rotation; one window for all channels, so colour does not
-            shift. For bands <= 3 the seed's conservative bound decides (tens
-            of microseconds); for 4 to 7 bands the numeric minimum
-            (:func:`skysh.dering.exact_min`) decides, which costs tens of
-            milliseconds per call: an offline or occasional operation. With
-            the Gibbs filter on, the shipped sky's 3-band irradiance is
-            already non-negative (the window is then the identity); without
-            it most skies need a window (the error report, section 5).
+            shift. Default (None): by intent, on for irradiance, off for
+            radiance.
         irradiance
-            Return irradiance coefficients (clamped-cosine convolution, lux
-            for the luminance) instead of radiance.
+            Return irradiance coefficients E (clamped-cosine convolution,
+            cd/m^2 x sr: lux for the luminance) instead of radiance. Engines
+            that want E / pi get it from :mod:`skysh.engines`.
         colourspace
             colour-science RGB colourspace name for the result; default the
             file's (linear sRGB). Exact, as SH are linear in colour.
@@ -245,8 +265,12 @@ class SkySH:
             For a parameter outside its range (named, with the range), NaN or
             inf, or ``bands`` outside [1, file bands]. Nothing is extrapolated.
         """
-        if type(sun_zenith) is float and type(turbidity) is float and type(sun_azimuth) is float:
-            out = self._one(sun_zenith, turbidity, sun_azimuth, bands, gibbs)
+        irradiance = check_flag(irradiance, "irradiance")
+        gibbs = not irradiance if gibbs is None else check_flag(gibbs, "gibbs")
+        dering = irradiance if dering is None else check_flag(dering, "dering")
+        ts, t, phi = _real_scalar(sun_zenith), _real_scalar(turbidity), _real_scalar(sun_azimuth)
+        if ts is not None and t is not None and phi is not None:
+            out = self._one(ts, t, phi, bands, gibbs)
         else:
             out = self._batch(sun_zenith, turbidity, sun_azimuth, bands, gibbs)
         if dering:
@@ -326,7 +350,7 @@ class SkySH:
         turbidity: float,
         sun_azimuth: float = 0.0,
         bands: int = 3,
-        gibbs: bool = True,
+        gibbs: bool | None = None,
         colourspace: str | None = None,
     ) -> NDArray[np.float64]:
         """Reconstructed sky radiance (cd/m^2, linear RGB) in the directions ``dirs`` (..., 3) -> (..., 3)."""
@@ -340,8 +364,8 @@ class SkySH:
         turbidity: float,
         sun_azimuth: float = 0.0,
         bands: int = 3,
-        gibbs: bool = True,
-        dering: bool = False,
+        gibbs: bool | None = None,
+        dering: bool | None = None,
         colourspace: str | None = None,
     ) -> NDArray[np.float64]:
         """Reconstructed irradiance (cd/m^2 x sr = lux for luminance) on surfaces with ``normals`` (..., 3) -> (..., 3)."""

@@ -3,7 +3,7 @@ Real spherical harmonics
 ========================
 
 The SH mathematics every other module of skysh builds on, in the convention of
-``CONVENTIONS.md``: real, orthonormal, **with the Condon-Shortley phase**, index
+``docs/conventions.md``: real, orthonormal, **with the Condon-Shortley phase**, index
 ``i = l (l + 1) + m``, "bands" ``N`` meaning ``l = 0 .. N - 1``, coefficient arrays
 shaped ``(..., N * N, C)``, right-handed Z-up frame.
 
@@ -208,7 +208,7 @@ def basis(dirs: ArrayLike, bands: int) -> NDArray[np.float64]:
     Parameters
     ----------
     dirs
-        Unit vectors, shape (..., 3), in the Z-up frame of CONVENTIONS.md.
+        Unit vectors, shape (..., 3), in the Z-up frame of docs/conventions.md.
     bands
         Number of bands N in [1, 64] (l = 0 .. N - 1).
 
@@ -621,7 +621,7 @@ def to_y_up(coeffs: ArrayLike) -> NDArray[np.float64]:
     """
     Re-express SH coefficients for a right-handed Y-up engine frame (glTF).
 
-    The engine evaluates the standard real SH formulas (CONVENTIONS.md) with its
+    The engine evaluates the standard real SH formulas (docs/conventions.md) with its
     own (x, y, z); the returned coefficients make that reproduce the same
     lighting. Zenith (+Z here) becomes +Y, +X stays +X, +Y here becomes -Z.
 

@@ -14,7 +14,7 @@ The sun's position from a place and a time (NOAA solar calculator)
 Frame
 -----
 skysh's frame is right-handed with Z up and the azimuth phi measured from +X
-towards +Y (``CONVENTIONS.md``). On the ground this module fixes
+towards +Y (``docs/conventions.md``). On the ground this module fixes
 
     **+X = East, +Y = North, +Z = up** (the local East-North-Up frame).
 

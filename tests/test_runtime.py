@@ -12,7 +12,7 @@ The runtime is checked against routes independent of its own arithmetic:
     file itself;
 -   identities: batch = loop, scalar fast path = array path, rotation (Habel
     eq. 4) written out here, the zonal sinc filter (eq. 5) computed with
-    :mod:`math`, the clamped-cosine factors of ``CONVENTIONS.md``, and the
+    :mod:`math`, the clamped-cosine factors of ``docs/conventions.md``, and the
     RGB -> RGB matrix from colour-science.
 
 One class per public entry point; every tolerance is a named constant with the
@@ -339,7 +339,7 @@ class TestGibbs:
 # Rotation (Habel eq. 4) and agreement with the reference projection
 # --------------------------------------------------------------------------- #
 def _rotate_eq4(c: np.ndarray, phi: float) -> np.ndarray:
-    """Rotation about +Z by phi, CONVENTIONS.md, written out per (l, m)."""
+    """Rotation about +Z by phi, docs/conventions.md, written out per (l, m)."""
     bands = math.isqrt(c.shape[0])
     out = c.copy()
     for l in range(1, bands):
@@ -539,15 +539,15 @@ class TestIrradianceAndEvaluation:
     def test_irradiance_is_sh_irradiance(self, sky: SkySH, bands: int, gibbs: bool) -> None:
         for args in [(0.4, 3.1, 0.9), (np.array([0.4, 1.2]), np.array([3.1, 5.0]), np.array([0.9, -2.0]))]:
             radiance = sky.coefficients(*args, bands=bands, gibbs=gibbs)
-            got = sky.coefficients(*args, bands=bands, gibbs=gibbs, irradiance=True)
+            got = sky.coefficients(*args, bands=bands, gibbs=gibbs, dering=False, irradiance=True)
             # The same multiplication by the same factors: bit for bit.
             np.testing.assert_array_equal(got, sh.irradiance(radiance))
 
     def test_cosine_lobe_values(self, sky: SkySH) -> None:
-        # CONVENTIONS.md: A_0 = pi, A_1 = 2 pi / 3, A_2 = pi / 4, A_3 = 0, A_4 = -pi / 24, A_5 = 0, A_6 = pi / 64.
+        # docs/conventions.md: A_0 = pi, A_1 = 2 pi / 3, A_2 = pi / 4, A_3 = 0, A_4 = -pi / 24, A_5 = 0, A_6 = pi / 64.
         lobe = [math.pi, 2 * math.pi / 3, math.pi / 4, 0.0, -math.pi / 24, 0.0, math.pi / 64]
         radiance = sky.coefficients(0.4, 3.1, 0.9, bands=7)
-        got = sky.coefficients(0.4, 3.1, 0.9, bands=7, irradiance=True)
+        got = sky.coefficients(0.4, 3.1, 0.9, bands=7, gibbs=True, dering=False, irradiance=True)
         expected = radiance * np.array([lobe[l] for l, _ in _lm_list(7)])[:, None]
         _close(got, expected, LOBE_RTOL)
 
@@ -657,3 +657,75 @@ class TestImports:
         assert "skysh.runtime" in modules  # the check ran the real code
         heavy = sorted(m for m in modules if m.split(".")[0] in ("colour", "matplotlib") or m == "skysh.fit")
         assert heavy == [], heavy
+
+
+# --------------------------------------------------------------------------- #
+# Defaults by intent, scalar types, flags
+# --------------------------------------------------------------------------- #
+TRUE_IRRADIANCE_BANDS = 12
+"""Bands of the reference irradiance: A_l for l >= 12 is below 3e-3 of A_0 and the sky's
+coefficients decay, so 12 bands of the converged projection stand in for the true irradiance
+far below the 3-band errors compared here (several % of the mean)."""
+
+
+class TestIntentDefaults:
+    def test_irradiance_defaults_are_no_gibbs_and_dering(self, sky: SkySH) -> None:
+        for args in [(0.4, 3.1, 0.9), (np.array([0.4, 1.5]), np.array([3.1, 2.5]), np.array([0.9, -2.0]))]:
+            got = sky.coefficients(*args, irradiance=True)
+            np.testing.assert_array_equal(got, sky.coefficients(*args, gibbs=False, dering=True, irradiance=True))
+
+    def test_radiance_defaults_are_gibbs_without_dering(self, sky: SkySH) -> None:
+        got = sky.coefficients(0.4, 3.1, 0.9)
+        np.testing.assert_array_equal(got, sky.coefficients(0.4, 3.1, 0.9, gibbs=True, dering=False))
+
+    def test_irradiance_at_default_beats_the_gibbs_filter(self, sky: SkySH) -> None:
+        # The README's example: the default irradiance at the zenith normal is closer to the true
+        # sky irradiance (a converged projection, 12 bands) than with the Gibbs filter.
+        dirs = _fibonacci_dirs(400)
+        for ts, t in [(0.5, 3.0), (1.3, 2.5), (0.0, 6.0)]:
+            truth = sh.evaluate(sh.irradiance(preetham.sky_sh(ts, t, TRUE_IRRADIANCE_BANDS)), dirs)
+            scale = truth.mean(axis=0)
+            default = np.abs(sky.irradiance_at(dirs, ts, t) - truth).max(axis=0) / scale
+            filtered = np.abs(sky.irradiance_at(dirs, ts, t, gibbs=True, dering=False) - truth).max(axis=0) / scale
+            assert np.all(default < filtered), (ts, t, default, filtered)
+            assert sky.irradiance_at(dirs, ts, t).min() >= 0.0
+
+    @pytest.mark.parametrize("name", ["gibbs", "dering", "irradiance"])
+    @pytest.mark.parametrize("bad", ["False", np.nan, 0, 1.0, None, [True]])
+    def test_flags_must_be_bools(self, sky: SkySH, name: str, bad: object) -> None:
+        if bad is None and name != "irradiance":
+            pytest.skip("None means 'by intent' for gibbs and dering")
+        with pytest.raises(TypeError, match=name):
+            sky.coefficients(0.4, 3.1, 0.9, **{name: bad})
+
+    def test_numpy_bools_are_bools(self, sky: SkySH) -> None:
+        np.testing.assert_array_equal(
+            sky.coefficients(0.4, 3.1, 0.9, gibbs=np.bool_(False)), sky.coefficients(0.4, 3.1, 0.9, gibbs=False)
+        )
+
+
+class TestScalarFastPath:
+    @pytest.mark.parametrize(
+        "args",
+        [
+            (0.5, 3, 1),
+            (np.float64(0.5), np.float64(3.0), np.float64(1.0)),
+            (np.array(0.5), np.array(3.0), np.array(1.0)),
+            (np.float32(0.5), np.int64(3), np.array(1, dtype=np.int32)),
+        ],
+    )
+    def test_any_real_scalar_takes_the_fast_path(self, sky: SkySH, args: tuple, monkeypatch: pytest.MonkeyPatch) -> None:
+        expected = sky.coefficients(*(float(a) for a in args), bands=3)
+
+        def no_batch(*_: object, **__: object) -> None:
+            raise AssertionError("a scalar call took the batch path")
+
+        monkeypatch.setattr(sky, "_batch", no_batch)
+        got = sky.coefficients(*args, bands=3)
+        np.testing.assert_array_equal(got, expected)
+        assert got.shape == (9, 3)
+
+    @pytest.mark.parametrize("bad", [True, np.bool_(True), 10**400, "0.5"])
+    def test_non_numbers_are_refused_by_name(self, sky: SkySH, bad: object) -> None:
+        with pytest.raises(ValueError, match="sun_zenith"):
+            sky.coefficients(bad, 3.0)

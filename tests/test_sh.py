@@ -3,7 +3,7 @@ Tests of :mod:`skysh.sh`
 ========================
 
 Every expected value comes from a route independent of skysh: scipy's complex
-``sph_harm_y`` turned real, the closed forms of ``CONVENTIONS.md`` typed from its
+``sph_harm_y`` turned real, the closed forms of ``docs/conventions.md`` typed from its
 table, exact polynomial integrals of :mod:`numpy.polynomial.legendre`, the
 definition of a rotated function evaluated point by point, or identities
 (orthonormality, composition, norm preservation, linearity).
@@ -132,7 +132,7 @@ def scipy_real_sh(dirs: np.ndarray, bands: int) -> np.ndarray:
 
 
 def closed_form_sh(dirs: np.ndarray) -> np.ndarray:
-    """The l <= 2 table of CONVENTIONS.md, typed from it, (M, 9)."""
+    """The l <= 2 table of docs/conventions.md, typed from it, (M, 9)."""
     x, y, z = dirs[:, 0], dirs[:, 1], dirs[:, 2]
     sp = math.sqrt(math.pi)
     return np.stack(
@@ -160,7 +160,7 @@ COSINE_LOBE_TABLE: tuple[float, ...] = (
     0.0,
     math.pi / 64.0,
 )
-"""A_0 .. A_6 typed from CONVENTIONS.md."""
+"""A_0 .. A_6 typed from docs/conventions.md."""
 
 
 def clamped_cosine_coefficients(bands: int) -> np.ndarray:
@@ -227,7 +227,7 @@ class TestNCoeffs:
 
 class TestIndex:
     def test_reference_values(self):
-        # CONVENTIONS.md table: i = l (l + 1) + m.
+        # docs/conventions.md table: i = l (l + 1) + m.
         expected = {(0, 0): 0, (1, -1): 1, (1, 0): 2, (1, 1): 3, (2, -2): 4, (2, 0): 6, (2, 2): 8, (15, 15): 255}
         for (l, m), i in expected.items():  # noqa: E741
             assert sh.index(l, m) == i
@@ -459,7 +459,7 @@ class TestProject:
         np.testing.assert_allclose(got, exact, rtol=0, atol=QUADRATURE_EXACT_RTOL * max(1.0, np.abs(exact).max()))
 
     def test_clamped_cosine_analytic(self):
-        # Independent check of the reference itself against CONVENTIONS.md's A_l:
+        # Independent check of the reference itself against docs/conventions.md's A_l:
         # c(l, 0) of max(0, z) = sqrt((2l + 1) / (4 pi)) A_l (Funk-Hecke).
         exact = clamped_cosine_coefficients(7)
         for l, a in enumerate(COSINE_LOBE_TABLE):  # noqa: E741
@@ -573,7 +573,7 @@ class TestProject:
 # Rotation
 # --------------------------------------------------------------------------- #
 def habel_rotate_z(c: np.ndarray, angle: float) -> np.ndarray:
-    """CONVENTIONS.md rotation about Z, typed from it: coefficient by coefficient."""
+    """docs/conventions.md rotation about Z, typed from it: coefficient by coefficient."""
     out = c.copy()
     bands = math.isqrt(c.shape[0])
     for l in range(1, bands):  # noqa: E741
