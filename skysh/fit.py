@@ -44,7 +44,7 @@ from typing import Any, Callable, Iterable
 import numpy as np
 from numpy.typing import NDArray
 
-from skysh import poly, preetham, sh
+from skysh import coefficient_file, poly, preetham, sh
 from skysh.coefficient_file import SkyTable, zonal_half_layout
 
 __all__ = [
@@ -362,7 +362,19 @@ def build(
         stored in the metadata under ``"errors"``), and the projected samples
         (``grid`` and ``test`` tuples of sun_zenith, turbidity, coeffs,
         denominator) for further study (:func:`compare_variants`).
+
+    Raises
+    ------
+    ValueError
+        If ``settings.colourspace`` is not one of
+        :data:`skysh.coefficient_file.FILE_COLOURSPACES` (checked before any
+        projection: the file could not record it).
     """
+    if settings.colourspace not in coefficient_file.FILE_COLOURSPACES:  # the file could not record it
+        raise ValueError(
+            f"settings.colourspace must be one of {', '.join(coefficient_file.FILE_COLOURSPACES)} "
+            f"(coefficient_file.FILE_COLOURSPACES), got {settings.colourspace!r}"
+        )
     grid_ts, grid_tu = chebyshev_grid(settings.grid)
     test_ts, test_tu = held_out_points(settings.held_out, settings.seed)
     points_ts = np.concatenate([grid_ts, test_ts])
@@ -412,13 +424,13 @@ def build(
             "frame": "right-handed, Z up; sun at azimuth 0 (+X); runtime rotates about Z (Habel eq. 4)",
             "units": "cd/m^2 (linear RGB; R = G = B = Y for the colourspace's white)",
         },
+        # The fields the runtime relies on (coefficient_file.RUNTIME_FIELDS), checked when the file is read.
         "colourspace": settings.colourspace,
-        "domain": {"sun_zenith": list(poly.SUN_ZENITH_DOMAIN), "turbidity": list(poly.TURBIDITY_DOMAIN)},
-        "basis": "coefficient = luminance_scale(sun_zenith, T) * sum table[i (d_tau+1) + j] T_i(x) T_j(y); "
-        "x = 4 sun_zenith / pi - 1, y = (2 ln T - ln 2.5 - ln 6) / (ln 6 - ln 2.5); "
-        "luminance_scale = Y_z / F_Y(0, sun_zenith) (Preetham appendix, cd/m^2)",
-        "term_order": "i (d_tau + 1) + j for the largest degrees of any band",
+        "domain": coefficient_file.DOMAIN,
+        "basis": coefficient_file.BASIS,
+        "term_order": coefficient_file.TERM_ORDER,
         "degrees": degrees.tolist(),
+        "bands": int(degrees.shape[0]),
         "requested_degrees": list(settings.degrees),
         "tolerance": tolerance,
         "weighting": "residuals divided by L_min per point and channel (seed eq. 3); floor "

@@ -10,7 +10,10 @@ squares on such data has zero residual, so the fitted table must equal the
 polynomial's coefficients to rounding, and the smallest degrees that meet any
 small budget are the true ones. The whole pipeline (:func:`skysh.fit.build`)
 runs once on synthetic projections (through its ``mapper`` hook) and once,
-tiny, on the real sky.
+tiny, on the real sky. ``tools/fit_sky.py`` (what ``skysh fit`` runs) is
+checked for its output rules with ``fit.build`` replaced by the polynomial sky:
+``--out`` required, the shipped file replaced only with ``--force``, every
+refusal one line with exit status 2.
 
 One class per public function; every tolerance is a named constant with the
 reason for its size.
@@ -316,3 +319,112 @@ class TestBuild:
         # The shipped form represents this data exactly; the others cannot.
         assert shipped["e_mean_worst_3"] < EXACT_BUDGET
         assert all(r["e_mean_worst_3"] > 1e3 * EXACT_BUDGET for r in rows[:-1])
+
+
+# --------------------------------------------------------------------------- #
+# tools/fit_sky.py: --out, --force and one-line refusals
+# --------------------------------------------------------------------------- #
+ROOT = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture(scope="module")
+def fit_sky():
+    """tools/fit_sky.py as a module (its main(argv) is what `skysh fit` runs)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("fit_sky_under_test", ROOT / "tools" / "fit_sky.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture()
+def fake_build(monkeypatch: pytest.MonkeyPatch, psky: PolynomialSky) -> list:
+    """fit.build replaced by the synthetic table (no projections): records its calls."""
+    calls: list = []
+
+    def build(settings, tolerance=None, mapper=map, provenance=None):
+        calls.append(settings)
+        table = coefficient_file.SkyTable(psky.table(), TRUE_DEGREES.copy(), {"condition_number": 1.0, **(provenance or {})})
+        report = {"held_out_points": 0, "by_bands": {}}
+        return table, report, {}
+
+    monkeypatch.setattr(fit, "build", build)
+    return calls
+
+
+def _tool_refuses(fit_sky, argv: list[str], capsys: pytest.CaptureFixture, match: str) -> None:
+    """main(argv) exits with status 2 after exactly one line '<prog>: error: ...' naming the problem."""
+    with pytest.raises(SystemExit) as info:
+        fit_sky.main(argv)
+    assert info.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and ": error: " in err and "usage:" not in err, err
+    assert match in err, err
+
+
+class TestFitToolOutput:
+    def test_out_required(self, fit_sky, capsys: pytest.CaptureFixture, fake_build: list) -> None:
+        before = coefficient_file.default_path().read_bytes()
+        _tool_refuses(fit_sky, ["--quick"], capsys, "--out is required")
+        _tool_refuses(fit_sky, [], capsys, "--out is required")
+        assert fake_build == [] and coefficient_file.default_path().read_bytes() == before
+
+    def test_shipped_file_needs_force(self, fit_sky, tmp_path: Path, capsys: pytest.CaptureFixture,
+                                      monkeypatch: pytest.MonkeyPatch, fake_build: list) -> None:
+        shipped = ROOT / "data" / coefficient_file.DEFAULT_FILE_NAME
+        before = shipped.read_bytes()
+        link = tmp_path / "link.npz"
+        link.symlink_to(shipped)
+        monkeypatch.chdir(ROOT)
+        for out in (str(shipped), "data/preetham_sh.npz", "skysh/../data/preetham_sh.npz", str(link)):
+            _tool_refuses(fit_sky, ["--quick", "--out", out], capsys, "is the shipped coefficient file; add --force")
+        installed = Path(fit_sky.skysh.__file__).resolve().parent / "data" / coefficient_file.DEFAULT_FILE_NAME
+        assert installed in fit_sky.shipped_files()
+        _tool_refuses(fit_sky, ["--out", str(installed)], capsys, "add --force")
+        assert fake_build == [] and shipped.read_bytes() == before
+
+    def test_force_replaces_the_named_file(self, fit_sky, tmp_path: Path, capsys: pytest.CaptureFixture,
+                                           monkeypatch: pytest.MonkeyPatch, fake_build: list, psky: PolynomialSky) -> None:
+        protected = tmp_path / "shipped.npz"
+        protected.write_bytes(b"the shipped bytes")
+        monkeypatch.setattr(fit_sky, "shipped_files", lambda: [protected])
+        _tool_refuses(fit_sky, ["--out", str(protected), "--no-progress"], capsys, "add --force")
+        assert protected.read_bytes() == b"the shipped bytes"
+        assert fit_sky.main(["--out", str(protected), "--force", "--no-progress", "--jobs", "1"]) == 0
+        np.testing.assert_array_equal(coefficient_file.read(protected).table, psky.table())
+        # Any other file is written without --force, existing or not.
+        other = tmp_path / "other.npz"
+        other.write_bytes(b"old")
+        assert fit_sky.main(["--out", str(other), "--no-progress", "--jobs", "1"]) == 0
+        assert coefficient_file.read(other).bands == 3 and len(fake_build) == 2
+
+    @pytest.mark.parametrize(
+        "argv, match",
+        [
+            (["--bogus"], "unrecognized arguments: --bogus"),
+            (["--out", "/tmp/x.npz", "--bands", "9"], "--bands"),
+            (["--out", "/tmp/x.npz", "--degrees", "3"], "--degrees"),
+            (["--out", "/tmp/x.npz", "--degrees", "32,7"], "--degrees must be at most 31,31"),
+            (["--out", "/tmp/x.npz", "--grid", "0,8"], "--grid must be two integers in [1, 256]"),
+            (["--out", "/tmp/x.npz", "--samples", "0"], "--samples must be an integer in [1, 1000000]"),
+            (["--out", "/tmp/x.npz", "--tolerance", "nan"], "--tolerance must lie in (0, 1)"),
+            (["--out", "/tmp/x.npz", "--jobs", "0"], "--jobs must be an integer in [1, 256]"),
+            (["--out", "/tmp/x.npz", "--colourspace", "Bogus"], "--colourspace must be one of: sRGB, ITU-R BT.709"),
+            (["--out", "/tmp"], "--out /tmp is a directory"),
+        ],
+        ids=["unknown-flag", "bands", "degrees-form", "degrees-bound", "grid", "samples", "tolerance", "jobs",
+             "colourspace", "directory"],
+    )
+    def test_one_line_refusals(self, fit_sky, capsys: pytest.CaptureFixture, fake_build: list, argv: list, match: str) -> None:
+        _tool_refuses(fit_sky, argv, capsys, match)
+        assert fake_build == []
+
+    def test_through_the_cli(self, capsys: pytest.CaptureFixture) -> None:
+        from skysh import cli
+
+        assert cli.main(["fit", "--bogus"]) == 2
+        err = capsys.readouterr().err
+        assert err == "skysh fit: error: unrecognized arguments: --bogus\n"
+        assert cli.main(["fit", "--quick"]) == 2
+        assert capsys.readouterr().err.startswith("skysh fit: error: --out is required")

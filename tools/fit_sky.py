@@ -8,10 +8,17 @@ weighted least squares (skysh.fit), measures the fit on held-out points and
 writes a versioned file (skysh.coefficient_file). The logic lives in the
 package; this is the command line.
 
-    python tools/fit_sky.py                      # the shipped data/preetham_sh.npz
     python tools/fit_sky.py --quick --out /tmp/q.npz
     python tools/fit_sky.py --tolerance 1e-3 --out /tmp/small.npz
     python tools/fit_sky.py --compare-scalings --out /tmp/x.npz
+    python tools/fit_sky.py --out data/preetham_sh.npz --force   # regenerate the shipped file
+
+``--out`` is required: there is no default file. The shipped coefficient file
+(``data/preetham_sh.npz`` of the source tree, ``skysh/data/preetham_sh.npz`` of
+the installed package, also through a symlink or hard link) is replaced only
+when named with ``--out`` and ``--force`` together; any other file is written
+(atomically) whether it exists or not. Every refusal is one line
+``<prog>: error: ...`` on stderr with exit status 2.
 """
 
 from __future__ import annotations
@@ -24,6 +31,7 @@ import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
+from typing import NoReturn
 
 # One BLAS thread per process: the pool already uses every core, and oversubscribed
 # OpenBLAS threads made small least-squares solves 50x slower on a loaded machine.
@@ -33,11 +41,45 @@ for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+import skysh  # noqa: E402
 from skysh import coefficient_file, fit, sh  # noqa: E402
 from skysh._version import __version__  # noqa: E402
 
 QUICK_GRID = (16, 8)
 QUICK_HELD_OUT = 24
+MAX_GRID_NODES: int = 256
+"""Largest --grid in either variable (256 x 256 projections already take hours)."""
+MAX_JOBS: int = 256
+"""Largest --jobs."""
+MAX_SAMPLES: int = 1_000_000
+"""Largest --samples: a projection holds about 55 floats per sample at 7 bands (440 MB at the bound) per worker."""
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """argparse whose refusals are one line ``<prog>: error: <message>`` and exit status 2 (no usage block)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {' '.join(message.split())}\n")
+
+
+def shipped_files() -> list[Path]:
+    """The shipped coefficient file of the source tree and of the imported (maybe installed) package."""
+    name = coefficient_file.DEFAULT_FILE_NAME
+    return [ROOT / "data" / name, Path(skysh.__file__).resolve().parent / "data" / name]
+
+
+def is_shipped_file(path: Path) -> bool:
+    """Whether ``path`` names a shipped coefficient file (same resolved path, or the same file through a link)."""
+    target = path.resolve()
+    for shipped in shipped_files():
+        if target == shipped.resolve():
+            return True
+        try:
+            if path.exists() and shipped.exists() and os.path.samefile(path, shipped):
+                return True
+        except OSError:
+            continue
+    return False
 
 
 def git_commit() -> str:
@@ -60,13 +102,40 @@ def parse_pair(text: str) -> tuple[int, int]:
     return a, b
 
 
+def check_arguments(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """Refuse (one line, exit 2) what would fail later or overwrite the shipped file, before any projection."""
+    if args.out is None:
+        parser.error(
+            "--out is required: name the file to write, e.g. --out /tmp/sky.npz (the shipped "
+            "data/preetham_sh.npz is replaced only with --out data/preetham_sh.npz --force)"
+        )
+    if is_shipped_file(args.out) and not args.force:
+        parser.error(f"--out {args.out} is the shipped coefficient file; add --force to replace it")
+    if args.out.is_dir():
+        parser.error(f"--out {args.out} is a directory; name a file")
+    if args.colourspace not in coefficient_file.FILE_COLOURSPACES:
+        parser.error(f"--colourspace must be one of: {', '.join(coefficient_file.FILE_COLOURSPACES)}; got {args.colourspace!r}")
+    top = coefficient_file.MAX_FILE_DEGREE
+    if max(args.degrees) > top:
+        parser.error(f"--degrees must be at most {top},{top} (coefficient_file.MAX_FILE_DEGREE), got {args.degrees[0]},{args.degrees[1]}")
+    if args.grid is not None and not all(1 <= n <= MAX_GRID_NODES for n in args.grid):
+        parser.error(f"--grid must be two integers in [1, {MAX_GRID_NODES}], got {args.grid[0]},{args.grid[1]}")
+    if args.samples is not None and not 1 <= args.samples <= MAX_SAMPLES:
+        parser.error(f"--samples must be an integer in [1, {MAX_SAMPLES}], got {args.samples}")
+    if args.tolerance is not None and not 0 < args.tolerance < 1:
+        parser.error(f"--tolerance must lie in (0, 1), got {args.tolerance}")
+    if not 1 <= args.jobs <= MAX_JOBS:
+        parser.error(f"--jobs must be an integer in [1, {MAX_JOBS}], got {args.jobs}")
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--out", type=Path, default=ROOT / "data" / coefficient_file.DEFAULT_FILE_NAME, help="output .npz (default: the shipped file)")
+    parser = OneLineParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--out", type=Path, default=None, help="output .npz (required; the shipped file only with --force)")
+    parser.add_argument("--force", action="store_true", help="allow --out to name the shipped data/preetham_sh.npz")
     parser.add_argument("--bands", type=int, default=7, choices=range(1, 8), metavar="{1..7}", help="SH bands to fit (default 7)")
     parser.add_argument("--degrees", type=parse_pair, default=(13, 7), help="polynomial degrees 'd_theta,d_tau' (default 13,7); the upper limit with --tolerance")
     parser.add_argument("--grid", type=parse_pair, default=None, help="grid nodes 'n_theta,n_tau' (default 48,24; --quick 16,8)")
-    parser.add_argument("--colourspace", default="sRGB", help="colour-science RGB colourspace name (default sRGB)")
+    parser.add_argument("--colourspace", default="sRGB", help=f"RGB colourspace, one of: {', '.join(coefficient_file.FILE_COLOURSPACES)} (default sRGB)")
     parser.add_argument("--method", default="quadrature", choices=sh.PROJECTION_METHODS, help="projection method (default: the sun-adapted quadrature)")
     parser.add_argument("--samples", type=int, default=None, help="samples per projection (default: the method's default)")
     parser.add_argument("--tolerance", type=float, default=None, help="choose the smallest degrees per band whose worst validation E_mean stays within this fraction (e.g. 1e-3)")
@@ -75,28 +144,19 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--compare-scalings", action="store_true", help="also print the held-out error of the fit's variable and scale choices")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     args = parser.parse_args(argv)
-    if args.samples is not None and args.samples < 1:
-        parser.error("--samples must be a positive integer")
-    if args.tolerance is not None and not 0 < args.tolerance < 1:
-        parser.error("--tolerance must lie in (0, 1)")
+    check_arguments(parser, args)
     grid = args.grid or (QUICK_GRID if args.quick else (48, 24))
     settings = fit.FitSettings(
         bands=args.bands, degrees=args.degrees, grid=grid, colourspace=args.colourspace, method=args.method,
         samples=args.samples, held_out=QUICK_HELD_OUT if args.quick else 256,
         validation=16 if args.quick else 128,
     )
-    try:
-        from skysh.preetham import rgb_from_xyz_matrix
-
-        rgb_from_xyz_matrix(args.colourspace)
-    except ValueError as error:
-        parser.error(str(error))
 
     from tqdm import tqdm
 
     total = grid[0] * grid[1] + settings.held_out + 4 + (settings.validation + 4 + 24 if args.tolerance else 0)
     start = time.perf_counter()
-    with ProcessPoolExecutor(max(1, args.jobs)) as pool:
+    with ProcessPoolExecutor(args.jobs) as pool:
         bar = tqdm(total=total, desc="projecting the sky", unit="sky", disable=args.no_progress, file=sys.stderr)
 
         def mapper(function, jobs):
@@ -111,10 +171,14 @@ def main(argv: list[str] | None = None) -> int:
         }
         sky_table, report, samples = fit.build(settings, tolerance=args.tolerance, mapper=mapper, provenance=provenance)
         bar.close()
-    path = coefficient_file.write(args.out, sky_table)
+    try:
+        path = coefficient_file.write(args.out, sky_table)
+    except (ValueError, OSError) as error:  # CoefficientFileError is a ValueError; an unwritable --out
+        parser.error(f"cannot write --out {args.out}: {error}")
     elapsed = time.perf_counter() - start
     print(f"wrote {path} ({path.stat().st_size / 1024:.1f} KiB) in {elapsed:.1f} s; degrees per band {sky_table.degrees.tolist()}, "
-          f"condition number {sky_table.metadata['condition_number']:.3g}")
+          f"condition number {sky_table.metadata['condition_number']:.3g}, largest |table value| "
+          f"{float(abs(sky_table.table).max()):.3g} (file bound {coefficient_file.MAX_TABLE_MAGNITUDE:g})")
     print(f"held-out errors ({report['held_out_points']} points incl. the 4 corners; fractions of L_min, worst channel):")
     print("| bands | worst E_mean (eq. 3) | mean E_mean | worst E_max (eq. 2) | worst DC error |")
     print("|---|---|---|---|---|")
