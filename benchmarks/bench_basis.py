@@ -28,7 +28,7 @@ from __future__ import annotations
 import argparse
 import json
 import time
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 from scipy.special import sph_harm_y
@@ -44,7 +44,7 @@ def scipy_basis(dirs: np.ndarray, bands: int) -> np.ndarray:
     theta = np.arccos(np.clip(dirs[:, 2], -1.0, 1.0))
     phi = np.arctan2(dirs[:, 1], dirs[:, 0])
     out = np.empty((dirs.shape[0], bands * bands))
-    for l in range(bands):  # noqa: E741
+    for l in range(bands):
         for m in range(l + 1):
             y = sph_harm_y(l, m, theta, phi)
             if m == 0:

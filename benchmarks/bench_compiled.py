@@ -39,10 +39,10 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_runtime import interleaved_best  # noqa: E402  (the same timing method)
+from bench_runtime import interleaved_best
 
-from skysh import runtime  # noqa: E402
-from skysh.preetham import _luminance_scale  # noqa: E402
+from skysh import runtime
+from skysh.preetham import _luminance_scale
 
 AGREEMENT: float = 1e-13
 """Largest difference kernel vs runtime, in units of the largest coefficient: the two sum

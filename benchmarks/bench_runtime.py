@@ -45,7 +45,7 @@ import math
 import os
 import platform
 import timeit
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 

@@ -18,19 +18,25 @@ References
     for Daylight. SIGGRAPH 1999.
 """
 
-from __future__ import annotations
-
-from typing import Any
+import typing as _typing
 
 from skysh._version import __version__
+
+if _typing.TYPE_CHECKING:  # pragma: no cover
+    from skysh.runtime import SkySH
 
 __all__ = ["__version__", "SkySH"]
 
 
-def __getattr__(name: str) -> Any:
+def __getattr__(name: str) -> "type[SkySH]":
     # The runtime is imported on first use so that ``import skysh`` stays cheap.
     if name == "SkySH":
-        from skysh.runtime import SkySH
+        from skysh.runtime import SkySH as runtime_sky
 
-        return SkySH
+        return runtime_sky
     raise AttributeError(f"module 'skysh' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    # The public names (the lazy ``SkySH`` included), the dunders and any submodule already imported.
+    return sorted(set(globals()) | set(__all__))

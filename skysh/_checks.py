@@ -2,35 +2,98 @@
 Input checks shared by every public function of skysh
 =====================================================
 
--   :func:`as_float_array`: convert to float64, refuse NaN / inf.
+-   :func:`as_float_array`: convert to float64, refuse NaN / inf, text, booleans,
+    complex numbers, objects and ragged lists.
 -   :func:`check_range`: refuse values outside a closed interval, naming the parameter.
--   :func:`check_dirs`: refuse direction arrays that are not (..., 3).
+-   :func:`check_scalar`: one real number (optionally in a closed interval).
+-   :func:`check_dirs`: refuse direction arrays that are not (..., 3) unit vectors.
 -   :func:`check_bands`: refuse a band count outside [1, max].
+-   :func:`check_count`: refuse an integer count outside [low, high].
+-   :func:`check_seed`: refuse a random seed that is not None or an integer >= 0.
+-   :func:`check_size`: refuse work whose arrays would exceed :data:`MAX_ARRAY_ELEMENTS`.
+-   :func:`check_choice`: refuse a name that is not one of the valid ones, listing them.
 -   :func:`check_flag`: refuse anything but ``bool`` / ``numpy.bool_`` (a TypeError).
+-   :func:`number_text`: a float as text that reads back exactly (for messages).
+-   :func:`short_repr`: a one-line, bounded repr of any value (for messages).
 
 Every failure is a :class:`ValueError` whose message names the parameter and the
-valid range, so a user can fix the call without reading the source.
+valid range, so a user can fix the call without reading the source; the one
+exception is a flag given as something other than a bool, a :class:`TypeError`.
+
+Empty arrays: a batch axis of length 0 (no directions, no frames, no places) is a
+batch of nothing and gives an empty result wherever a function takes batches, as
+each docstring says; an empty coefficient axis, image or list of per-band factors
+means nothing and is refused. Sizes: no function builds an array of more than
+:data:`MAX_ARRAY_ELEMENTS` values; a call that would is refused before any work.
 """
 
 from __future__ import annotations
 
+import math
+from typing import Any
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["as_float_array", "check_range", "check_dirs", "check_bands", "check_flag", "check_choice"]
+__all__ = [
+    "MAX_ARRAY_ELEMENTS",
+    "as_float_array",
+    "check_range",
+    "check_scalar",
+    "check_dirs",
+    "check_bands",
+    "check_count",
+    "check_seed",
+    "check_size",
+    "check_flag",
+    "check_choice",
+    "number_text",
+    "short_repr",
+]
+
+MAX_ARRAY_ELEMENTS: int = 1 << 28
+"""Largest number of values (268,435,456; 2 GiB of float64) of any one array a skysh function
+builds. A call whose inputs (a large batch, a broadcast view, a huge count) would need more is
+refused at once with a ValueError naming the parameter, instead of a MemoryError after minutes."""
+
+_NOT_A_NUMBER: str = "must be a real number or an array of real numbers"
+
+
+def number_text(value: Any) -> str:
+    """``value`` as text that reads back as the same float ("90", "90.0000001", "inf"), or its repr."""
+    try:
+        x = float(value)
+    except (TypeError, ValueError, OverflowError):
+        return repr(value)
+    if x.is_integer() and abs(x) < 1e16:
+        return str(int(x))
+    return repr(x)
+
+
+def short_repr(value: Any) -> str:
+    """A repr of ``value`` short enough for one line of a message."""
+    text = repr(value) if not isinstance(value, np.ndarray) or value.size <= 6 else f"array of shape {value.shape}"
+    text = " ".join(text.split())
+    return text if len(text) <= 80 else text[:77] + "..."
 
 
 def as_float_array(value: ArrayLike, name: str) -> NDArray[np.float64]:
-    """Return ``value`` as a float64 array, refusing NaN and inf with a ValueError."""
-    raw = np.asarray(value)
-    if raw.dtype.kind not in "iuf":  # no text, booleans, objects or complex numbers
-        raise ValueError(f"{name} must be a real number or array of them, got {value!r}")
+    """Return ``value`` as a float64 array; refuse NaN, inf, text, booleans, complex, objects, ragged lists."""
+    if type(value) is int:  # a Python int of any size: float() says whether it fits
+        try:
+            value = float(value)
+        except OverflowError:
+            raise ValueError(f"{name} must be finite (a float64), got an integer of {len(str(value))} digits") from None
     try:
-        array = np.asarray(raw, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise ValueError(f"{name} must be a real number or array of them, got {value!r}") from error
-    if not np.all(np.isfinite(array)):
-        raise ValueError(f"{name} must be finite (no NaN or inf), got {value!r}")
+        raw = np.asarray(value)
+    except (TypeError, ValueError) as error:  # ragged nested lists: numpy's "inhomogeneous shape"
+        raise ValueError(f"{name} {_NOT_A_NUMBER} (a rectangular array), got {short_repr(value)}") from error
+    if raw.dtype.kind not in "iuf":  # no text, booleans, objects or complex numbers
+        raise ValueError(f"{name} {_NOT_A_NUMBER}, got {short_repr(value)}")
+    check_size(raw.size, name)  # before any copy: a broadcast view can be far larger than memory
+    array = np.asarray(raw, dtype=np.float64)
+    if not np.all(np.isfinite(array)):  # also catches float128 / uint64 values beyond float64
+        raise ValueError(f"{name} must be finite (no NaN or inf), got {short_repr(value)}")
     return array
 
 
@@ -40,15 +103,40 @@ def check_range(value: ArrayLike, name: str, low: float, high: float, unit: str 
     if array.size and (array.min() < low or array.max() > high):
         bad = array[(array < low) | (array > high)].ravel()[0]
         suffix = f" {unit}" if unit else ""
-        raise ValueError(f"{name} must lie in [{low:g}, {high:g}]{suffix}, got {bad:g}")
+        raise ValueError(
+            f"{name} must lie in [{low:g}, {high:g}]{suffix}, got {number_text(bad)}"
+        )
     return array
 
 
-def check_dirs(dirs: ArrayLike, name: str = "dirs") -> NDArray[np.float64]:
-    """Return directions as a float64 (..., 3) array; refuse other shapes, NaN, inf and zero vectors."""
+def check_scalar(value: Any, name: str, low: float = -math.inf, high: float = math.inf, unit: str = "") -> float:
+    """Return one real number as a float after checking it is finite and in [low, high]."""
+    array = check_range(value, name, low, high, unit)
+    if array.ndim:
+        raise ValueError(f"{name} must be a scalar (one number), got an array of shape {array.shape}")
+    return float(array)
+
+
+def check_size(count: int, name: str, what: str = "") -> None:
+    """Refuse work needing more than :data:`MAX_ARRAY_ELEMENTS` values in one array, naming ``name``."""
+    if count > MAX_ARRAY_ELEMENTS:
+        detail = f" ({what})" if what else ""
+        raise ValueError(
+            f"{name} is too large: the result would hold {count:,} values{detail}, more than the "
+            f"{MAX_ARRAY_ELEMENTS:,} (2 GiB of float64) skysh builds in one array; split the work"
+        )
+
+
+def check_dirs(dirs: ArrayLike, name: str = "dirs", per_point: int = 3) -> NDArray[np.float64]:
+    """Return directions as a float64 (..., 3) array; refuse other shapes, NaN, inf and non-unit vectors.
+
+    An empty batch (shape (0, 3)) is accepted: zero directions give zero results. ``per_point``
+    is the number of values the caller builds per direction, for :func:`check_size`.
+    """
     array = as_float_array(dirs, name)
     if array.ndim == 0 or array.shape[-1] != 3:
-        raise ValueError(f"{name} must have shape (..., 3), got {array.shape}")
+        raise ValueError(f"{name} must have shape (..., 3) (unit vectors), got {array.shape}")
+    check_size(array.size // 3 * max(per_point, 3), name, f"{array.size // 3:,} directions")
     flat = array.reshape(-1, 3)
     norm2 = np.einsum("ij,ij->i", flat, flat)  # |d|^2; |d| within 1e-6 of 1 <=> |d|^2 within ~2e-6
     if array.size and not np.all(np.abs(norm2 - 1.0) < 2e-6):
@@ -56,19 +144,31 @@ def check_dirs(dirs: ArrayLike, name: str = "dirs") -> NDArray[np.float64]:
     return array
 
 
+def check_count(value: Any, name: str, low: int, high: int) -> int:
+    """Return ``value`` as an int after checking it is an integer (not a bool) in [low, high]."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise ValueError(f"{name} must be an integer in [{low}, {high}], got {short_repr(value)}")
+    if not low <= int(value) <= high:
+        raise ValueError(f"{name} must be an integer in [{low}, {high}], got {int(value)}")
+    return int(value)
+
+
 def check_bands(bands: int, name: str = "bands", high: int = 64) -> int:
     """Return ``bands`` as an int after checking 1 <= bands <= high."""
-    if isinstance(bands, bool) or not isinstance(bands, (int, np.integer)):
-        raise ValueError(f"{name} must be an integer in [1, {high}], got {bands!r}")
-    if not 1 <= int(bands) <= high:
-        raise ValueError(f"{name} must be an integer in [1, {high}], got {bands}")
-    return int(bands)
+    return check_count(bands, name, 1, high)
+
+
+def check_seed(seed: Any, name: str = "seed") -> int | None:
+    """Return a random seed: None, or an integer in [0, 2**64 - 1] (not a bool)."""
+    if seed is None:
+        return None
+    return check_count(seed, name, 0, (1 << 64) - 1)
 
 
 def check_choice(value: str, name: str, choices: tuple[str, ...]) -> str:
-    """Return ``value`` after checking it is one of ``choices``."""
-    if value not in choices:
-        raise ValueError(f"{name} must be one of {', '.join(map(repr, choices))}, got {value!r}")
+    """Return ``value`` after checking it is one of ``choices`` (a str; the message lists them)."""
+    if not isinstance(value, str) or value not in choices:
+        raise ValueError(f"{name} must be one of {', '.join(map(repr, choices))}, got {short_repr(value)}")
     return value
 
 
@@ -79,7 +179,7 @@ def check_flag(value: object, name: str) -> bool:
     given as text or a number would silently mean the opposite of what was meant.
     """
     if type(value) is bool:
-        return value  # type: ignore[return-value]
+        return value
     if type(value) is np.bool_:
         return bool(value)
-    raise TypeError(f"{name} must be a bool (True or False), got {value!r} of type {type(value).__name__}")
+    raise TypeError(f"{name} must be a bool (True or False), got {short_repr(value)} of type {type(value).__name__}")

@@ -1,57 +1,64 @@
 """
-Export the fitted sky to C, GLSL, HLSL and JSON
-===============================================
+Export the fitted sky to C, GLSL, HLSL, JSON and JavaScript
+===========================================================
 
 Self-contained source that reproduces :meth:`skysh.SkySH.coefficients` without
 Python: the polynomial tables of the shipped coefficient file and an evaluation
 function, like the C arrays the Habel seed published, ready to paste.
 
--   :func:`export_source`: the text for one language (``"c"``, ``"glsl"``,
-    ``"hlsl"``, ``"json"``).
+-   :func:`export_source`: the text for one language (:data:`EXPORT_FORMATS`);
+    ``engine=`` makes the generated function return an engine's numbers
+    (:mod:`skysh.engines`). ``"js"`` and ``"json"`` are written by :mod:`skysh.export_js`.
 -   :func:`export_tables`: the numbers every export is generated from.
 -   :func:`double_literal`, :func:`float32_literal`: shortest round-trip
     number text for the generated code.
--   :data:`EXPORT_FORMATS`, :data:`C_REAL_TYPES`: the accepted names.
+-   :data:`EXPORT_FORMATS`, :data:`C_REAL_TYPES`, :data:`DEFAULT_FILE_NAMES`.
 
-What the exported function computes, step by step (each step is the
-runtime's, in the same order; the numbers come from :class:`skysh.SkySH`'s
-plan and :mod:`skysh.preetham`, never retyped):
+The C export is a **header** (default name ``sky_sh.h``): an include guard,
+``static inline`` functions and ``static const`` tables, so any number of C99
+or C++ files may ``#include`` it; link with ``-lm`` (it calls ``tan``, ``exp``,
+``log``, ``cos``, ``sin``, ``fmod``).
 
-1.  Refuse a sun zenith outside [0, pi/2] rad or a turbidity outside
-    [2.5, 6] (and, in C, a non-finite azimuth): the C function returns -1, the
-    shader functions ``false``, and the output is zeroed.
-2.  ``x = clamp(sun_zenith * X_SCALE - X_SHIFT, -1, 1)`` and
-    ``y = clamp(log(turbidity) * Y_SCALE - Y_SHIFT, -1, 1)``.
-3.  Chebyshev polynomials ``T_0 .. T_DX`` at x and ``T_0 .. T_DY`` at y by the
-    three-term recurrence ``T_k = 2 t T_(k-1) - T_(k-2)`` (the runtime uses
-    ``cos(k acos t)``: the same values to a few ulps).
-4.  ``acc[r][c] = sum_i sum_j T_i(x) T_j(y) TABLE[i][j][r][c]`` for every stored
-    coefficient r (the m >= 0 ones, ordered ``[(l, m) for l in range(N) for m
-    in range(l + 1)]``) and channel c (R, G, B).
-5.  Gibbs filter (Habel eq. 5), when asked: the zonal rows (m = 0) times
-    ``GIBBS[l] = sinc(pi l / N)``.
-6.  Times the luminance scale ``Y_z(ts, T) / F_Y(0, ts)`` of Preetham's model
-    (zenith luminance in cd/m^2 over the Perez function of the zenith).
-7.  Rotation about Z by the sun azimuth (Habel eq. 4): coefficient
-    ``i = l (l + 1) + m`` is ``acc[l (l + 1) / 2 + |m|]`` times ``cos(m phi)``
-    for m >= 0 and ``sin(|m| phi)`` for m < 0.
-8.  Irradiance, when asked: band l times the clamped-cosine factor ``LOBE[l]``.
+What the exported function computes, step by step (the runtime's steps in its
+order; the numbers come from :class:`skysh.SkySH`'s plan and
+:mod:`skysh.preetham`, never retyped):
 
-The result is (N * N) RGB coefficients in cd/m^2 (irradiance in cd/m^2 x sr),
-linear sRGB, Z up, real SH with the Condon-Shortley phase (``CONVENTIONS.md``).
+1.  Refuse a sun zenith outside [0, pi/2] rad or a turbidity outside [2.5, 6]
+    (and, in C, a non-finite azimuth): C returns -1, the shaders ``false``,
+    and the output is zeroed.
+2.  ``x = clamp(sun_zenith * X_SCALE - X_SHIFT, -1, 1)``,
+    ``y = clamp(log(turbidity) * Y_SCALE - Y_SHIFT, -1, 1)``; Chebyshev
+    ``T_0 .. T_DX`` at x and ``T_0 .. T_DY`` at y by ``T_k = 2 t T_(k-1) -
+    T_(k-2)`` (the runtime's ``cos(k acos t)``, to a few ulps).
+3.  ``acc[r][c] = sum_i sum_j T_i(x) T_j(y) TABLE[i][j][r][c]`` for every stored
+    coefficient r (m >= 0, ordered ``[(l, m) for l in range(N) for m in
+    range(l + 1)]``) and channel c (R, G, B); C and JS store the table r-major,
+    so that each r is a contiguous dot product.
+4.  Gibbs filter (Habel eq. 5), when asked: zonal rows times ``sinc(pi l / N)``;
+    times the luminance scale ``Y_z(ts, T) / F_Y(0, ts)`` (Preetham, cd/m^2).
+5.  Rotation about Z (Habel eq. 4) by ``phi = fmod(sun_azimuth, 2 pi)`` as the
+    runtime reduces it: coefficient ``l (l + 1) + m`` is ``acc[l (l + 1) / 2 +
+    |m|]`` times ``cos(m phi)`` (m >= 0) or ``sin(|m| phi)`` (m < 0).
+6.  Deringing, when asked, for 3 bands (:mod:`skysh.export_dering`: the
+    runtime's window, Sloan 2017); other band counts refuse it.
+7.  A per-band factor, which commutes with the rotation (one multiplication
+    with step 5 when there is no step 6): ``A_l`` for irradiance, or an
+    engine's folded factor (:func:`skysh.export_js.engine_plan`).
+8.  Engines only: the rest of the engine's linear map (frame change, signs,
+    per-coefficient constants, packing) written out term by term, plus its
+    constant offset.
+
+Without an engine the result is (N * N) RGB coefficients in cd/m^2 (irradiance
+cd/m^2 x sr), linear sRGB, Z up, real SH with the Condon-Shortley phase
+(``docs/conventions.md``); with one, ``skysh.engines.convert(radiance,
+engine)`` flattened row-major.
 
 Precision
 ---------
-C uses ``double`` by default (``real="float"`` gives a float build). GLSL and
-HLSL tables and arithmetic are **float32** (``float``): the shader languages'
-default precision. Measured against the Python runtime in
-``tests/test_export.py`` over a grid of the domain, as the largest coefficient
-error over the DC coefficient of the same channel, worst channel
-(``python tests/test_export.py`` prints the figures): the double C build
-agrees to 1.4e-15; float32 tables alone (the GLSL/HLSL tables, evaluated in
-double) cost 9e-8; a whole float32 evaluation (inputs, tables and arithmetic:
-the float C build, standing in for a shader) 1.0e-6. GPU ``tan``/``exp`` may be less
-accurate than the C library's.
+C uses ``double`` (``real="float"``: a float build); GLSL and HLSL are float32.
+``python tests/test_export.py`` prints each one's agreement with the Python
+runtime (largest error over the DC of the same channel, worst channel). GPU
+``tan``/``exp`` may be less accurate than the C library's.
 
 References
 ----------
@@ -63,30 +70,38 @@ References
 
 from __future__ import annotations
 
-import json
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from string import Template
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from skysh import coefficient_file, runtime, sh
-from skysh._checks import check_bands, check_choice
+from skysh._checks import check_bands, check_choice, check_scalar
 from skysh._version import __version__
 from skysh.preetham import PEREZ_Y
 
+if TYPE_CHECKING:
+    from skysh.export_js import EnginePlan
+
 __all__ = [
-    "EXPORT_FORMATS", "C_REAL_TYPES", "ExportTables", "export_tables", "export_source", "double_literal",
-    "float32_literal",
+    "EXPORT_FORMATS", "C_REAL_TYPES", "DEFAULT_FILE_NAMES", "ExportTables", "export_tables", "export_source",
+    "double_literal", "float32_literal",
 ]
 
-EXPORT_FORMATS: tuple[str, ...] = ("c", "glsl", "hlsl", "json")
+EXPORT_FORMATS: tuple[str, ...] = ("c", "glsl", "hlsl", "json", "js")
 """Languages :func:`export_source` writes."""
 
 C_REAL_TYPES: tuple[str, ...] = ("double", "float")
 """Floating-point types of the C export (its tables and arithmetic)."""
+
+DEFAULT_FILE_NAMES: dict[str, str] = {
+    "c": "sky_sh.h", "glsl": "sky_sh.glsl", "hlsl": "sky_sh.hlsl", "json": "sky_sh.json", "js": "sky_sh.mjs",
+}
+"""The file name each export is meant to be saved as (the C export is a header)."""
 
 _VALUES_PER_LINE: int = 4
 """RGB triples per line in the generated tables."""
@@ -97,26 +112,12 @@ class ExportTables:
     """
     Everything an export is generated from, for one band count.
 
-    Attributes
-    ----------
-    bands
-        N: the export evaluates l = 0 .. N - 1.
-    degrees
-        (DX, DY): Chebyshev degrees in x (sun zenith) and y (log turbidity).
-    table
-        (DX + 1, DY + 1, N (N + 1) / 2, 3) Chebyshev coefficients, no Gibbs
-        filter folded in, of the stored (m >= 0) SH coefficients divided by the
-        luminance scale (dimensionless: the scale carries cd/m^2).
-    half_layout
-        The (l, m) of the third axis of ``table``.
-    gibbs
-        (N,) zonal Gibbs factors sinc(pi l / N).
-    lobe
-        (N,) clamped-cosine factors A_l.
-    x_scale, x_shift, y_scale, y_shift
-        The Chebyshev variables' affine maps (see the module docstring, step 2).
-    sun_zenith_domain, turbidity_domain
-        The fitted domain, radians and turbidity.
+    Attributes: ``bands`` N (l = 0 .. N - 1); ``degrees`` (DX, DY), the Chebyshev degrees
+    in x (sun zenith) and y (log turbidity); ``table`` (DX + 1, DY + 1, N (N + 1) / 2, 3),
+    the Chebyshev coefficients (no Gibbs filter) of the stored (m >= 0) SH coefficients
+    over the luminance scale (dimensionless), third axis ``half_layout`` (l, m); ``gibbs``
+    (N,) sinc(pi l / N); ``lobe`` (N,) A_l; ``x_scale, x_shift, y_scale, y_shift`` the
+    variables' affine maps (module docstring, step 2); the fitted domain (radians, turbidity).
     """
 
     bands: int
@@ -144,6 +145,8 @@ def export_tables(sky: runtime.SkySH, bands: int = 3) -> ExportTables:
     bands
         N in [1, the file's bands].
     """
+    if not isinstance(sky, runtime.SkySH):
+        raise ValueError(f"sky must be a loaded skysh.SkySH (SkySH.load()), got {type(sky).__name__}")
     bands = check_bands(bands, high=sky.bands)
     plan = sky._plans[(bands, False)]  # the runtime's own table: one source for the numbers
     dx, dy = plan.degrees
@@ -165,18 +168,20 @@ def export_tables(sky: runtime.SkySH, bands: int = 3) -> ExportTables:
     )
 
 
-# --------------------------------------------------------------------------- #
-# Number formatting
-# --------------------------------------------------------------------------- #
+FLOAT32_MAX: float = float(np.finfo(np.float32).max)
+"""Largest finite float32: beyond it a float32 literal would read back as inf."""
+
+
 def double_literal(value: float) -> str:
     """Shortest text that reads back as the same double, always with a '.' or an exponent."""
-    text = repr(float(value))
+    text = repr(check_scalar(value, "value"))
     return text if any(ch in text for ch in ".en") else text + ".0"
 
 
 def float32_literal(value: float) -> str:
     """Shortest text that reads back as the same float32 (valid in C, GLSL and HLSL, no suffix)."""
-    return np.format_float_scientific(np.float32(value), unique=True, trim="0")
+    number = check_scalar(value, "value", -FLOAT32_MAX, FLOAT32_MAX, unit="(the float32 range)")
+    return np.format_float_scientific(np.float32(number), unique=True, trim="0")
 
 
 def _real(value: float, real: str) -> str:
@@ -188,9 +193,7 @@ def _rows(items: list[str], indent: str) -> str:
     return (",\n" + indent).join(lines)
 
 
-# --------------------------------------------------------------------------- #
-# Templates. $-placeholders (string.Template) so the languages' braces stay literal.
-# --------------------------------------------------------------------------- #
+# Templates: $-placeholders (string.Template), so the languages' braces stay literal.
 _HEADER = """\
 skysh $version: SH coefficients of the Preetham sky (Habel et al. 2008), $bands band(s).
 Generated by `skysh export --format $language$options`; do not edit.
@@ -199,11 +202,19 @@ phase; coefficient i = l (l + 1) + m, l = 0 .. $last_l. Output: linear sRGB,
 cd/m^2 (irradiance: cd/m^2 x sr). Domain: sun zenith [0, pi/2] rad,
 turbidity [2.5, 6], any finite azimuth (radians). Tables: $precision.
 Reproduces skysh.SkySH.coefficients(sun_zenith, turbidity, sun_azimuth,
-bands=$bands, gibbs=..., irradiance=...)."""
+bands=$bands, gibbs=..., dering=..., irradiance=...).$engine_text"""
+
+_ENGINE_HEADER = """
+Engine $engine ($count values, shape $shape, row-major): skysh_engine_coefficients()
+returns skysh.engines.convert(radiance coefficients, "$engine") flattened; it
+takes radiance and applies what the engine expects (frame, signs, scaling)."""
 
 _C = Template("""\
 /*
 $header
+
+A C99 header: #include "sky_sh.h" in any number of C or C++ files and link
+with -lm. Every function is static inline and every table static const.
 */
 #ifndef SKYSH_SKY_SH_H
 #define SKYSH_SKY_SH_H
@@ -215,11 +226,16 @@ $header
 #define SKYSH_HALF $half /* stored (m >= 0) coefficients */
 #define SKYSH_DX $dx /* Chebyshev degree in x (sun zenith) */
 #define SKYSH_DY $dy /* Chebyshev degree in y (log turbidity) */
+#define SKYSH_DERING $has_dering /* 1: the dering option works (3-band exports) */
+#define SKYSH_TERMS ((SKYSH_DX + 1) * (SKYSH_DY + 1))
 
 typedef $real skysh_real;
 
-/* [i][j][r][c]: coefficient of T_i(x) T_j(y) for stored coefficient r, channel c (R, G, B). */
-static const skysh_real SKYSH_TABLE[SKYSH_DX + 1][SKYSH_DY + 1][SKYSH_HALF][3] = {
+/*
+ * [r][3 (i (SKYSH_DY + 1) + j) + c]: coefficient of T_i(x) T_j(y) for stored coefficient r,
+ * channel c (R, G, B); the terms of one stored coefficient are contiguous.
+ */
+static const skysh_real SKYSH_TABLE[SKYSH_HALF][SKYSH_TERMS * 3] = {
     $table
 };
 
@@ -229,9 +245,9 @@ static const skysh_real SKYSH_LOBE[SKYSH_BANDS] = { $lobe };
 
 /* Perez A..E of luminance as (slope, intercept) in turbidity (Preetham 1999). */
 static const skysh_real SKYSH_PEREZ_Y[5][2] = { $perez };
-
+$engine_tables$dering_defs
 /* Y_z / F_Y(0, ts): the sky's luminance scale, cd/m^2. */
-static skysh_real skysh_luminance_scale(skysh_real ts, skysh_real t)
+static inline skysh_real skysh_luminance_scale(skysh_real ts, skysh_real t)
 {
     const skysh_real chi = ($c4_9 - t / $c120) * ($pi - $c2 * ts);
     const skysh_real yz = $c1000 * (($c40453 * t - $c49710) * $tan(chi) - $c02155 * t + $c24192);
@@ -243,21 +259,23 @@ static skysh_real skysh_luminance_scale(skysh_real ts, skysh_real t)
 }
 
 /*
- * The sky's SH coefficients. Angles in radians. gibbs: apply the zonal sinc
- * filter; irradiance: convolve with the clamped cosine. Returns 0, or -1
- * (out zeroed) for a parameter outside the domain, NaN or inf.
+ * The steps of skysh_coefficients; mode selects the per-band factor:
+ * 0 none (radiance), 1 the clamped cosine (irradiance)$mode_doc.
  */
-static int skysh_coefficients(skysh_real sun_zenith, skysh_real turbidity, skysh_real sun_azimuth,
-                              int gibbs, int irradiance, skysh_real out[SKYSH_COUNT][3])
+static inline int skysh_evaluate(skysh_real sun_zenith, skysh_real turbidity, skysh_real sun_azimuth,
+                                 int gibbs, $dering_type dering, int mode, skysh_real out[SKYSH_COUNT][3])
 {
-    skysh_real tx[SKYSH_DX + 1], ty[SKYSH_DY + 1], acc[SKYSH_HALF][3];
-    skysh_real x, y, scale;
+    skysh_real tx[SKYSH_DX + 1], ty[SKYSH_DY + 1], w[SKYSH_TERMS], acc[SKYSH_HALF][3];
+    skysh_real x, y, phi, scale;
     int i, j, r, c, l, m;
     for (i = 0; i < SKYSH_COUNT; ++i)
         out[i][0] = out[i][1] = out[i][2] = $c0;
     if (!(sun_zenith >= $zmin && sun_zenith <= $zmax) || !(turbidity >= $tmin && turbidity <= $tmax)
         || !(sun_azimuth - sun_azimuth == $c0))
         return -1;
+    if (dering && !SKYSH_DERING)
+        return -2;
+    phi = $fmod(sun_azimuth, $two_pi); /* as the runtime: exact, so k * phi stays small */
     x = sun_zenith * $x_scale - $x_shift;
     y = $log(turbidity) * $y_scale - $y_shift;
     x = x < -$c1 ? -$c1 : (x > $c1 ? $c1 : x);
@@ -268,33 +286,88 @@ static int skysh_coefficients(skysh_real sun_zenith, skysh_real turbidity, skysh
         tx[i] = i == 1 ? x : $c2 * x * tx[i - 1] - tx[i - 2];
     for (j = 1; j <= SKYSH_DY; ++j)
         ty[j] = j == 1 ? y : $c2 * y * ty[j - 1] - ty[j - 2];
-    for (r = 0; r < SKYSH_HALF; ++r)
-        acc[r][0] = acc[r][1] = acc[r][2] = $c0;
     for (i = 0; i <= SKYSH_DX; ++i)
-        for (j = 0; j <= SKYSH_DY; ++j) {
-            const skysh_real w = tx[i] * ty[j];
-            for (r = 0; r < SKYSH_HALF; ++r)
-                for (c = 0; c < 3; ++c)
-                    acc[r][c] += w * SKYSH_TABLE[i][j][r][c];
+        for (j = 0; j <= SKYSH_DY; ++j)
+            w[i * (SKYSH_DY + 1) + j] = tx[i] * ty[j];
+    for (r = 0; r < SKYSH_HALF; ++r) { /* Habel eq. (1): six independent sums per row */
+        const skysh_real *p = SKYSH_TABLE[r];
+        skysh_real r0 = $c0, g0 = $c0, b0 = $c0, r1 = $c0, g1 = $c0, b1 = $c0;
+        for (i = 0; i + 1 < SKYSH_TERMS; i += 2, p += 6) {
+            r0 += w[i] * p[0];
+            g0 += w[i] * p[1];
+            b0 += w[i] * p[2];
+            r1 += w[i + 1] * p[3];
+            g1 += w[i + 1] * p[4];
+            b1 += w[i + 1] * p[5];
         }
+        if (i < SKYSH_TERMS) {
+            r0 += w[i] * p[0];
+            g0 += w[i] * p[1];
+            b0 += w[i] * p[2];
+        }
+        acc[r][0] = r0 + r1;
+        acc[r][1] = g0 + g1;
+        acc[r][2] = b0 + b1;
+    }
     scale = skysh_luminance_scale(sun_zenith, turbidity);
     for (l = 0; l < SKYSH_BANDS; ++l) {
-        const skysh_real band = (irradiance ? SKYSH_LOBE[l] : $c1) * scale;
+        const skysh_real band = $band_factor * scale;
         const int row = l * (l + 1) / 2; /* stored (l, 0) */
         if (gibbs)
             for (c = 0; c < 3; ++c)
                 acc[row][c] *= SKYSH_GIBBS[l];
         for (m = -l; m <= l; ++m) {
             const int k = m < 0 ? -m : m;
-            const skysh_real rot = m < 0 ? $sin(k * sun_azimuth) : $cos(k * sun_azimuth);
+            const skysh_real rot = m < 0 ? $sin(k * phi) : $cos(k * phi);
             for (c = 0; c < 3; ++c)
                 out[l * (l + 1) + m][c] = acc[row + k][c] * rot * band;
         }
-    }
+    }$dering_step
     return 0;
 }
 
+/*
+ * The sky's SH coefficients. Angles in radians. gibbs: apply the zonal sinc
+ * filter; dering: the least window that keeps the irradiance non-negative (Sloan
+ * 2017, SKYSH_DERING exports only); irradiance: convolve with the clamped cosine.
+ * Returns 0, -1 (out zeroed) for a parameter outside the domain, NaN or inf, or
+ * -2 (out zeroed) for dering without SKYSH_DERING.
+ */
+static inline int skysh_coefficients(skysh_real sun_zenith, skysh_real turbidity, skysh_real sun_azimuth,
+                                     int gibbs, $dering_type dering, int irradiance, skysh_real out[SKYSH_COUNT][3])
+{
+    return skysh_evaluate(sun_zenith, turbidity, sun_azimuth, gibbs, dering, irradiance ? 1 : 0, out);
+}
+$engine_function
 #endif /* SKYSH_SKY_SH_H */
+""")
+
+_C_ENGINE_TABLES = """
+/* Engine "$engine": per-band factors folded before the rotation (skysh.export_js.engine_plan). */
+#define SKYSH_ENGINE_COUNT $count /* values, shape $shape */
+static const skysh_real SKYSH_ENGINE_BAND[SKYSH_BANDS] = { $band };
+"""
+
+_C_ENGINE_FUNCTION = Template("""
+/*
+ * The numbers engine "$engine" takes: skysh.engines.convert(radiance, "$engine")
+ * flattened row-major, shape $shape. Arguments as skysh_coefficients; returns 0,
+ * or -1 / -2 (out zeroed) as skysh_coefficients.
+ */
+static inline int skysh_engine_coefficients(skysh_real sun_zenith, skysh_real turbidity, skysh_real sun_azimuth,
+                                            int gibbs, $dering_type dering, skysh_real out[SKYSH_ENGINE_COUNT])
+{
+    skysh_real sh[SKYSH_COUNT][3];
+    int p;
+    const int rc = skysh_evaluate(sun_zenith, turbidity, sun_azimuth, gibbs, dering, 2, sh);
+    if (rc != 0) {
+        for (p = 0; p < SKYSH_ENGINE_COUNT; ++p)
+            out[p] = $c0;
+        return rc;
+    }
+    $lines
+    return 0;
+}
 """)
 
 _SHADER = Template("""\
@@ -308,17 +381,18 @@ _SHADER = Template("""\
 #define SKYSH_HALF $half
 #define SKYSH_DX $dx
 #define SKYSH_DY $dy
+#define SKYSH_DERING $has_dering
 
 // Index ((i * (SKYSH_DY + 1) + j) * SKYSH_HALF + r): RGB coefficient of T_i(x) T_j(y)
 // for stored coefficient r.
 $const $vec3 SKYSH_TABLE[$n_table] = $open
     $table
 $close;
-$const float SKYSH_GIBBS[SKYSH_BANDS] = $gibbs_open$gibbs$gibbs_close;
-$const float SKYSH_LOBE[SKYSH_BANDS] = $lobe_open$lobe$lobe_close;
+$const float SKYSH_GIBBS[SKYSH_BANDS] = $gibbs;
+$const float SKYSH_LOBE[SKYSH_BANDS] = $lobe;
 // Perez A..E of luminance as (slope, intercept) in turbidity (Preetham 1999).
-$const float SKYSH_PEREZ_Y[10] = $perez_open$perez$perez_close;
-
+$const float SKYSH_PEREZ_Y[10] = $perez;
+$engine_tables$dering_defs
 // Y_z / F_Y(0, ts): the sky's luminance scale, cd/m^2.
 float skysh_luminance_scale(float ts, float t)
 {
@@ -331,15 +405,17 @@ float skysh_luminance_scale(float ts, float t)
     return yz / f;
 }
 
-// The sky's SH coefficients. Angles in radians. Returns false (coeffs zeroed)
-// for a parameter outside the domain.
-bool skysh_coefficients(float sunZenith, float turbidity, float sunAzimuth, bool gibbs, bool irradiance,
-                        out $vec3 coeffs[SKYSH_COUNT])
+// The steps of skysh_coefficients; mode selects the per-band factor:
+// 0 none (radiance), 1 the clamped cosine (irradiance)$mode_doc.
+bool skysh_evaluate(float sunZenith, float turbidity, float sunAzimuth, bool gibbs, $dering_type dering, int mode,
+                    out $vec3 coeffs[SKYSH_COUNT])
 {
     for (int n = 0; n < SKYSH_COUNT; ++n)
         coeffs[n] = $vec3($c0, $c0, $c0);
-    if (!(sunZenith >= $zmin && sunZenith <= $zmax) || !(turbidity >= $tmin && turbidity <= $tmax))
+    if (!(sunZenith >= $zmin && sunZenith <= $zmax) || !(turbidity >= $tmin && turbidity <= $tmax)
+        || (dering && SKYSH_DERING == 0))
         return false;
+    float phi = $mod(sunAzimuth, $two_pi);
     float x = clamp(sunZenith * $x_scale - $x_shift, -$c1, $c1);
     float y = clamp(log(turbidity) * $y_scale - $y_shift, -$c1, $c1);
     float tx[SKYSH_DX + 1];
@@ -362,19 +438,51 @@ bool skysh_coefficients(float sunZenith, float turbidity, float sunAzimuth, bool
         }
     float scale = skysh_luminance_scale(sunZenith, turbidity);
     for (int l = 0; l < SKYSH_BANDS; ++l) {
-        float band = (irradiance ? SKYSH_LOBE[l] : $c1) * scale;
+        float band = $band_factor * scale;
         int row = l * (l + 1) / 2;
         if (gibbs)
             acc[row] *= SKYSH_GIBBS[l];
         for (int m = -l; m <= l; ++m) {
             int k = abs(m);
-            float rot = (m < 0) ? sin(float(k) * sunAzimuth) : cos(float(k) * sunAzimuth);
+            float rot = (m < 0) ? sin(float(k) * phi) : cos(float(k) * phi);
             coeffs[l * (l + 1) + m] = acc[row + k] * (rot * band);
         }
+    }$dering_step
+    return true;
+}
+
+// The sky's SH coefficients. Angles in radians. Returns false (coeffs zeroed)
+// for a parameter outside the domain, or dering without SKYSH_DERING (3 bands).
+bool skysh_coefficients(float sunZenith, float turbidity, float sunAzimuth, bool gibbs, $dering_type dering, bool irradiance,
+                        out $vec3 coeffs[SKYSH_COUNT])
+{
+    return skysh_evaluate(sunZenith, turbidity, sunAzimuth, gibbs, dering, irradiance ? 1 : 0, coeffs);
+}
+$engine_function""")
+
+_SHADER_ENGINE_TABLES = """
+// Engine "$engine": per-band factors folded before the rotation (skysh.export_js.engine_plan).
+#define SKYSH_ENGINE_COUNT $count // values, shape $shape
+$const float SKYSH_ENGINE_BAND[SKYSH_BANDS] = $band;
+"""
+
+_SHADER_ENGINE_FUNCTION = Template("""
+// The numbers engine "$engine" takes: skysh.engines.convert(radiance, "$engine")
+// flattened row-major, shape $shape. Returns false (values zeroed) outside the domain.
+bool skysh_engine_coefficients(float sunZenith, float turbidity, float sunAzimuth, bool gibbs, $dering_type dering,
+                               out float values[SKYSH_ENGINE_COUNT])
+{
+    $vec3 sh[SKYSH_COUNT];
+    if (!skysh_evaluate(sunZenith, turbidity, sunAzimuth, gibbs, dering, 2, sh)) {
+        for (int p = 0; p < SKYSH_ENGINE_COUNT; ++p)
+            values[p] = $c0;
+        return false;
     }
+    $lines
     return true;
 }
 """)
+
 
 # The zenith luminance of skysh.preetham._zenith_luminance (Preetham 1999, appendix):
 # Y_z = 1000 ((4.0453 T - 4.9710) tan chi - 0.2155 T + 2.4192), chi = (4/9 - T/120)(pi - 2 ts).
@@ -383,118 +491,162 @@ bool skysh_coefficients(float sunZenith, float turbidity, float sunAzimuth, bool
 _ZENITH_CONSTANTS: dict[str, float] = {
     "c4_9": 4.0 / 9.0, "c120": 120.0, "c1000": 1000.0,
     "c40453": 4.0453, "c49710": 4.9710, "c02155": 0.2155, "c24192": 2.4192,
-    "pi": math.pi, "c0": 0.0, "c1": 1.0, "c2": 2.0,
+    "pi": math.pi, "two_pi": 2.0 * math.pi, "c0": 0.0, "c1": 1.0, "c2": 2.0,
 }
 
 
-def _header(tables: ExportTables, language: str, precision: str, options: str) -> str:
+_DERING_STEP: dict[str, str] = {
+    "c": """
+    if (dering) { /* skysh.export_dering: windows d in place, returns the window (unused here) */
+        double d[SKYSH_COUNT][3], window[3];
+        for (i = 0; i < SKYSH_COUNT; ++i)
+            for (c = 0; c < 3; ++c)
+                d[i][c] = out[i][c];
+        (void)skysh_dering3(d, window);
+        for (l = 0; l < SKYSH_BANDS; ++l)
+            for (i = l * l; i < (l + 1) * (l + 1); ++i)
+                for (c = 0; c < 3; ++c)
+                    out[i][c] = (skysh_real)(d[i][c] * $factor);
+    }""",
+    "shader": """
+    if (dering) { // skysh.export_dering: windows d in place
+        float d[27];
+        float window[3];
+        for (int n = 0; n < SKYSH_COUNT; ++n) {
+            d[3 * n] = coeffs[n].x;
+            d[3 * n + 1] = coeffs[n].y;
+            d[3 * n + 2] = coeffs[n].z;
+        }
+        skysh_dering3(d, window);
+        for (int l = 0; l < SKYSH_BANDS; ++l)
+            for (int n = l * l; n < (l + 1) * (l + 1); ++n)
+                coeffs[n] = $vec3(d[3 * n], d[3 * n + 1], d[3 * n + 2]) * $factor;
+    }""",
+}
+"""Step 6: the deringing of :mod:`skysh.export_dering` on the rotated radiance, then step 7."""
+
+
+def _dering_parts(language: str, bands: int, factor: str, vec3: str = "") -> tuple[str, str]:
+    """(definitions, step) of the runtime's 3-band deringing in ``language`` (empty for other N)."""
+    if bands != 3:
+        return "", ""
+    from skysh import export_dering
+
+    source = export_dering.dering_source(language, target="irradiance", name="skysh_dering3")
+    if language == "c":
+        source = source.replace("\nint skysh_dering3(", "\nstatic inline int skysh_dering3(", 1)
+    step = Template(_DERING_STEP["c" if language == "c" else "shader"]).substitute(factor=factor, vec3=vec3)
+    return "\n" + source, step
+
+
+def _header(tables: ExportTables, language: str, precision: str, options: str, plan: EnginePlan | None) -> str:
+    engine_text = ""
+    if plan is not None:
+        engine_text = Template(_ENGINE_HEADER).substitute(
+            engine=plan.engine, count=plan.offset.size, shape=plan.shape
+        )
     return Template(_HEADER).substitute(
-        version=__version__, bands=tables.bands, language=language, options=options,
+        version=__version__, bands=tables.bands, language=language,
+        options=options + (f" --engine {plan.engine}" if plan is not None else ""),
         last_l=tables.bands - 1, precision=precision,
+        engine_text=engine_text,
     )
 
 
-def _c_source(tables: ExportTables, real: str) -> str:
-    fmt = lambda v: _real(v, real)  # noqa: E731
-    blocks = []  # one {...} per (i, j), nested as the array is declared (no brace elision)
-    for i, plane in enumerate(tables.table):
-        rows = []
-        for j, block in enumerate(plane):
-            triples = ["{" + ", ".join(fmt(v) for v in rgb) + "}" for rgb in block]
-            rows.append(f"{{ /* T_{i}(x) T_{j}(y) */\n            " + _rows(triples, "            ") + "\n        }")
-        blocks.append("{\n        " + ",\n        ".join(rows) + "\n    }")
-    suffix = "" if real == "double" else "f"
-    header = _header(
-        tables, "c", f"{real} (C {real})", "" if real == "double" else " --c-real float"
-    )
-    return _C.substitute(
-        header=header,
+def _common(tables: ExportTables, fmt: Callable[[float], str], plan: EnginePlan | None, language: str,
+            vec3: str = "") -> dict[str, Any]:
+    """Substitutions shared by the C and shader templates."""
+    one = fmt(1.0)
+    factor = f"(mode == 1 ? SKYSH_LOBE[l] : {one})"  # step 7
+    if plan is not None:
+        factor = f"(mode == 1 ? SKYSH_LOBE[l] : (mode == 2 ? SKYSH_ENGINE_BAND[l] : {one}))"
+    defs, step = _dering_parts(language, tables.bands, factor, vec3)
+    return dict(
         bands=tables.bands, count=tables.bands**2, half=len(tables.half_layout),
-        dx=tables.degrees[0], dy=tables.degrees[1], real=real,
-        table=",\n    ".join(blocks),
+        dx=tables.degrees[0], dy=tables.degrees[1],
+        zmin=fmt(tables.sun_zenith_domain[0]), zmax=fmt(tables.sun_zenith_domain[1]),
+        tmin=fmt(tables.turbidity_domain[0]), tmax=fmt(tables.turbidity_domain[1]),
+        x_scale=fmt(tables.x_scale), x_shift=fmt(tables.x_shift),
+        y_scale=fmt(tables.y_scale), y_shift=fmt(tables.y_shift),
+        mode_doc=", 2 the engine's folded factor" if plan is not None else "",
+        band_factor=f"(dering ? {one} : {factor})",  # with deringing, step 7 follows step 6
+        dering_defs=defs, dering_step=step, has_dering=int(bool(step)),
+        dering_type="int" if language == "c" else "bool",
+        **{k: fmt(v) for k, v in _ZENITH_CONSTANTS.items()},
+    )
+
+
+def _c_value(q: int) -> str:
+    return f"sh[{q // 3}][{q % 3}]"
+
+
+def _shader_value(q: int) -> str:
+    return f"sh[{q // 3}].{'xyz'[q % 3]}"
+
+
+def _c_source(tables: ExportTables, real: str, plan: EnginePlan | None) -> str:
+    def fmt(v: float) -> str:
+        return _real(v, real)
+
+    blocks = []  # one {...} per stored coefficient r, as the array is declared (no brace elision)
+    by_row = tables.table.reshape(-1, len(tables.half_layout), 3).transpose(1, 0, 2)  # (r, i (DY + 1) + j, c)
+    for (l, m), terms in zip(tables.half_layout, by_row):
+        triples = [", ".join(fmt(v) for v in rgb) for rgb in terms]
+        blocks.append(f"{{ /* (l, m) = ({l}, {m}) */\n        " + _rows(triples, "        ") + "\n    }")
+    suffix = "" if real == "double" else "f"
+    common = _common(tables, fmt, plan, "c")
+    engine_tables = engine_function = ""
+    if plan is not None:
+        engine_tables = Template(_C_ENGINE_TABLES).substitute(
+            engine=plan.engine, count=plan.offset.size, shape=plan.shape, band=", ".join(map(fmt, plan.band_factor)),
+        )
+        lines = [f"out[{p}] = {plan.expression(p, _c_value, fmt)};" for p in range(plan.offset.size)]
+        engine_function = _C_ENGINE_FUNCTION.substitute(common, engine=plan.engine, shape=plan.shape,
+                                                        lines="\n    ".join(lines))
+    return _C.substitute(
+        common,
+        header=_header(tables, "c", f"{real} (C {real})", "" if real == "double" else " --c-real float", plan),
+        real=real, table=",\n    ".join(blocks),
         gibbs=", ".join(map(fmt, tables.gibbs)), lobe=", ".join(map(fmt, tables.lobe)),
         perez=", ".join("{" + ", ".join(map(fmt, row)) + "}" for row in PEREZ_Y),
-        zmin=fmt(tables.sun_zenith_domain[0]), zmax=fmt(tables.sun_zenith_domain[1]),
-        tmin=fmt(tables.turbidity_domain[0]), tmax=fmt(tables.turbidity_domain[1]),
-        x_scale=fmt(tables.x_scale), x_shift=fmt(tables.x_shift),
-        y_scale=fmt(tables.y_scale), y_shift=fmt(tables.y_shift),
         tan="tan" + suffix, exp="exp" + suffix, cos="cos" + suffix, sin="sin" + suffix, log="log" + suffix,
-        **{k: fmt(v) for k, v in _ZENITH_CONSTANTS.items()},
+        fmod="fmod" + suffix, engine_tables=engine_tables, engine_function=engine_function,
     )
 
 
-def _shader_source(tables: ExportTables, language: str) -> str:
+def _shader_source(tables: ExportTables, language: str, plan: EnginePlan | None) -> str:
     glsl = language == "glsl"
     vec3 = "vec3" if glsl else "float3"
+    const = "const" if glsl else "static const"
     fmt = float32_literal
 
-    def brackets(n: int) -> tuple[str, str]:
-        return (f"float[{n}](", ")") if glsl else ("{ ", " }")
+    def array(values: Any, kind: str = "float") -> str:
+        items = [fmt(v) for v in values] if kind == "float" else list(values)
+        return (f"{kind}[{len(items)}](" + ", ".join(items) + ")") if glsl else "{ " + ", ".join(items) + " }"
 
     triples = [f"{vec3}(" + ", ".join(fmt(v) for v in rgb) + ")" for rgb in tables.table.reshape(-1, 3)]
-    n_table = len(triples)
-    open_, close = (f"{vec3}[{n_table}](", ")") if glsl else ("{", "}")
-    gibbs = [fmt(v) for v in tables.gibbs]
-    lobe = [fmt(v) for v in tables.lobe]
-    perez = [fmt(v) for v in PEREZ_Y.ravel()]
-    g_open, g_close = brackets(tables.bands)
-    p_open, p_close = brackets(len(perez))
-    header = _header(tables, language, "float32", "").replace("\n", "\n// ")
+    common = _common(tables, fmt, plan, language, vec3)
+    engine_tables = engine_function = ""
+    if plan is not None:
+        engine_tables = Template(_SHADER_ENGINE_TABLES).substitute(
+            engine=plan.engine, count=plan.offset.size, shape=plan.shape, const=const, band=array(plan.band_factor),
+        )
+        lines = [f"values[{p}] = {plan.expression(p, _shader_value, fmt)};" for p in range(plan.offset.size)]
+        engine_function = _SHADER_ENGINE_FUNCTION.substitute(common, engine=plan.engine, shape=plan.shape,
+                                                             lines="\n    ".join(lines), vec3=vec3)
+    table_open, table_close = (f"{vec3}[{len(triples)}](", ")") if glsl else ("{", "}")
     return _SHADER.substitute(
-        header_lines=header,
-        const="const" if glsl else "static const", vec3=vec3,
-        bands=tables.bands, count=tables.bands**2, half=len(tables.half_layout),
-        dx=tables.degrees[0], dy=tables.degrees[1], n_table=n_table,
-        open=open_, close=close, table=_rows(triples, "    "),
-        gibbs_open=g_open, gibbs=", ".join(gibbs), gibbs_close=g_close,
-        lobe_open=g_open, lobe=", ".join(lobe), lobe_close=g_close,
-        perez_open=p_open, perez=", ".join(perez), perez_close=p_close,
-        zmin=fmt(tables.sun_zenith_domain[0]), zmax=fmt(tables.sun_zenith_domain[1]),
-        tmin=fmt(tables.turbidity_domain[0]), tmax=fmt(tables.turbidity_domain[1]),
-        x_scale=fmt(tables.x_scale), x_shift=fmt(tables.x_shift),
-        y_scale=fmt(tables.y_scale), y_shift=fmt(tables.y_shift),
-        **{k: fmt(v) for k, v in _ZENITH_CONSTANTS.items()},
+        common,
+        header_lines=_header(tables, language, "float32", "", plan).replace("\n", "\n// "),
+        const=const, vec3=vec3, n_table=len(triples), open=table_open, close=table_close,
+        table=_rows(triples, "    "), gibbs=array(tables.gibbs), lobe=array(tables.lobe), perez=array(PEREZ_Y.ravel()),
+        mod="mod" if glsl else "fmod", engine_tables=engine_tables, engine_function=engine_function,
     )
 
 
-def _json_source(tables: ExportTables) -> str:
-    payload: dict[str, Any] = {
-        "format": "skysh-export",
-        "skysh_version": __version__,
-        "bands": tables.bands,
-        "degrees": list(tables.degrees),
-        "table": tables.table.tolist(),
-        "table_layout": "[i][j][r][c]: coefficient of T_i(x) T_j(y) for stored coefficient r "
-        "(half_layout[r] = (l, m), m >= 0) and channel c (R, G, B); float64",
-        "half_layout": [list(lm) for lm in tables.half_layout],
-        "gibbs": tables.gibbs.tolist(),
-        "lobe": tables.lobe.tolist(),
-        "x": {"scale": tables.x_scale, "shift": tables.x_shift, "of": "sun_zenith (rad)"},
-        "y": {"scale": tables.y_scale, "shift": tables.y_shift, "of": "log(turbidity)"},
-        "domain": {"sun_zenith": list(tables.sun_zenith_domain), "turbidity": list(tables.turbidity_domain)},
-        "perez_Y": PEREZ_Y.tolist(),
-        "luminance_scale": "Y_z / F_Y(0, ts) with Y_z = 1000 ((4.0453 T - 4.9710) tan chi - 0.2155 T + 2.4192), "
-        "chi = (4/9 - T/120)(pi - 2 ts), F_Y(0, ts) = (1 + A e^B)(1 + C e^(D ts) + E cos^2 ts), "
-        "(A..E) = perez_Y[:, 0] T + perez_Y[:, 1]",
-        "algorithm": [
-            "refuse sun_zenith outside domain.sun_zenith, turbidity outside domain.turbidity, non-finite azimuth",
-            "x = clamp(sun_zenith * x.scale - x.shift, -1, 1); y = clamp(log(turbidity) * y.scale - y.shift, -1, 1)",
-            "T_0..T_DX at x and T_0..T_DY at y (Chebyshev: T_0 = 1, T_1 = t, T_k = 2 t T_(k-1) - T_(k-2))",
-            "acc[r][c] = sum_ij T_i(x) T_j(y) table[i][j][r][c]",
-            "if gibbs: acc[r] *= gibbs[l] for the rows with m = 0",
-            "acc *= luminance_scale(sun_zenith, turbidity)",
-            "out[l(l+1)+m] = acc[l(l+1)/2+|m|] * (cos(m phi) if m >= 0 else sin(|m| phi))",
-            "if irradiance: out[l(l+1)+m] *= lobe[l]",
-        ],
-        "units": "cd/m^2 (irradiance: cd/m^2*sr)",
-        "colourspace": "sRGB (linear, Rec. 709 primaries, D65)",
-        "convention": "Z up, azimuth from +X towards +Y, real orthonormal SH with the Condon-Shortley phase, "
-        "index l(l+1)+m",
-    }
-    return json.dumps(payload, indent=1) + "\n"
-
-
-def export_source(sky: runtime.SkySH, language: str, bands: int = 3, real: str = "double") -> str:
+def export_source(
+    sky: runtime.SkySH, language: str, bands: int | None = None, real: str = "double", engine: str | None = None
+) -> str:
     """
     Source text that evaluates the sky's SH coefficients in ``language``.
 
@@ -503,15 +655,20 @@ def export_source(sky: runtime.SkySH, language: str, bands: int = 3, real: str =
     sky
         A loaded :class:`skysh.SkySH` (its default colourspace, linear sRGB).
     language
-        One of :data:`EXPORT_FORMATS`: ``"c"`` (a header with ``static``
-        tables and ``skysh_coefficients()``; C99, compiles cleanly with
-        ``-std=c99 -Wall -Wextra -pedantic``), ``"glsl"`` / ``"hlsl"`` (float32 constant arrays and
-        ``skysh_coefficients()``), ``"json"`` (the float64 tables and the
-        algorithm in words).
+        One of :data:`EXPORT_FORMATS`: ``"c"`` (a C99 header, ``sky_sh.h``, ``static const``
+        tables and ``static inline`` functions, clean under ``-std=c99 -Wall -Wextra
+        -pedantic``; link with ``-lm``), ``"glsl"`` / ``"hlsl"`` (float32), ``"json"`` (float64
+        tables and the algorithm in words), ``"js"`` (an ES module, :mod:`skysh.export_js`).
     bands
-        N in [1, the file's bands]: the export evaluates N bands only.
+        N in [1, the file's bands]: the export evaluates N bands (default 3). For ``"js"`` the
+        most the module holds, a run-time option there (default all the file's).
     real
         C only: ``"double"`` (default) or ``"float"``.
+    engine
+        None, or one of :data:`skysh.engines.ENGINES`: C, GLSL and HLSL gain
+        ``skysh_engine_coefficients()`` returning that engine's numbers
+        (:class:`skysh.export_js.EnginePlan`), JSON the plan. Refused for ``"js"``,
+        whose ``coefficients()`` takes every engine as an option.
 
     Returns
     -------
@@ -521,13 +678,26 @@ def export_source(sky: runtime.SkySH, language: str, bands: int = 3, real: str =
     Raises
     ------
     ValueError
-        For an unknown language or ``real``, or ``bands`` out of range.
+        Unknown language, ``real`` or engine; ``bands`` out of range or beyond the engine's.
     """
     check_choice(language, "language", EXPORT_FORMATS)
     check_choice(real, "real", C_REAL_TYPES)
-    tables = export_tables(sky, bands)
+    if language == "js":
+        if engine is not None:
+            raise ValueError("engine must be None for the js export (its coefficients() takes an engine option)")
+        from skysh import export_js
+
+        return export_js.module_source(sky, bands)
+    tables = export_tables(sky, 3 if bands is None else bands)
+    plan = None
+    if engine is not None:
+        from skysh.export_js import engine_plan
+
+        plan = engine_plan(engine, tables.bands)
     if language == "c":
-        return _c_source(tables, real)
+        return _c_source(tables, real, plan)
     if language == "json":
-        return _json_source(tables)
-    return _shader_source(tables, language)
+        from skysh.export_js import json_source
+
+        return json_source(tables, plan)
+    return _shader_source(tables, language, plan)

@@ -16,9 +16,20 @@ squares, and measures the result on held-out points. Used by
 -   :func:`evaluate_table`: the polynomial tables at points (no rotation).
 -   :func:`error_measures`: E_mean (eq. 3), E_max (eq. 2) and the DC error.
 -   :func:`choose_degrees`: the smallest degrees per band meeting a budget.
--   :func:`build`: all of the above, returning a :class:`~skysh.coefficient_file.SkyTable`.
+-   :func:`build`: all of the above and the sun's table, returning a :class:`~skysh.coefficient_file.SkyTable`.
+-   :func:`zenith_of_air_mass`, :func:`sun_grid`, :func:`sun_held_out_points`,
+    :func:`fit_sun_table`, :func:`evaluate_sun_table`, :func:`sun_errors`,
+    :func:`build_sun`: the sun's direct illuminance (:mod:`skysh.solar`) as the
+    file's sun table (:mod:`skysh.sunlight` evaluates it): ln XYZ in Chebyshev
+    polynomials of the air-mass variable x and the turbidity variable y.
 
-The fit minimises the seed's error measure: each grid point's residuals are
+The sun's table is fitted by plain least squares of ln XYZ (equal weights,
+so relative errors) on Chebyshev-Gauss nodes of (x, y), and measured on
+held-out points uniform in the sun zenith and, separately, uniform in the air
+mass (three quarters of m's range lie within 5 degrees of the horizon), plus
+the domain's edges and corners (:data:`SUN_ERROR_DEFINITION`).
+
+The sky's fit minimises the seed's error measure: each grid point's residuals are
 divided by that point's L_min (per channel), so the least-squares objective is
 the sum over grid points of E_mean(theta, tau)^2 (eq. 3).
 
@@ -38,14 +49,16 @@ References
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass
-from typing import Any, Callable, Iterable
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from skysh import coefficient_file, poly, preetham, sh
-from skysh.coefficient_file import SkyTable, zonal_half_layout
+from skysh import coefficient_file, poly, preetham, sh, sunlight
+from skysh._checks import MAX_ARRAY_ELEMENTS, check_count, check_flag, check_seed
+from skysh.coefficient_file import NamedTable, SkyTable, zonal_half_layout
 
 __all__ = [
     "LMIN_FLOOR",
@@ -62,6 +75,14 @@ __all__ = [
     "build",
     "VARIANTS",
     "compare_variants",
+    "SUN_ERROR_DEFINITION",
+    "zenith_of_air_mass",
+    "sun_grid",
+    "sun_held_out_points",
+    "fit_sun_table",
+    "evaluate_sun_table",
+    "sun_errors",
+    "build_sun",
 ]
 
 LMIN_FLOOR: float = 0.05
@@ -86,6 +107,20 @@ class FitSettings:
     seed: int = 2008
     held_out: int = 256
     validation: int = 128
+    sun_degrees: tuple[int, int] = (12, 6)
+    sun_grid: tuple[int, int] = (48, 16)
+    sun_held_out: int = 512
+
+
+MAX_GRID_NODES: int = 256
+"""Largest fitting grid in either variable (256 x 256 projections already take hours)."""
+
+
+def _check_grid(grid: Any) -> tuple[int, int]:
+    """``grid`` as (points in sun zenith, points in turbidity), each an integer in [1, MAX_GRID_NODES]."""
+    if not isinstance(grid, (tuple, list)) or len(grid) != 2:
+        raise ValueError(f"grid must be a pair (points in sun zenith, points in turbidity), got {grid!r:.80}")
+    return check_count(grid[0], "grid[0]", 1, MAX_GRID_NODES), check_count(grid[1], "grid[1]", 1, MAX_GRID_NODES)
 
 
 def chebyshev_grid(grid: tuple[int, int]) -> tuple[NDArray, NDArray]:
@@ -96,6 +131,7 @@ def chebyshev_grid(grid: tuple[int, int]) -> tuple[NDArray, NDArray]:
     Nodes cluster towards the domain edges, where a polynomial fit is least
     constrained; the corners themselves stay free for held-out testing.
     """
+    grid = _check_grid(grid)
     def nodes(n: int, lo: float, hi: float) -> NDArray:
         k = np.arange(n)
         x = -np.cos((2 * k + 1) * math.pi / (2 * n))
@@ -109,7 +145,9 @@ def chebyshev_grid(grid: tuple[int, int]) -> tuple[NDArray, NDArray]:
 
 def held_out_points(count: int, seed: int, corners: bool = True) -> tuple[NDArray, NDArray]:
     """``count`` uniform random points of the domain (seeded) followed by its 4 corners."""
-    rng = np.random.default_rng(seed)
+    count = check_count(count, "count", 0, MAX_ARRAY_ELEMENTS)
+    rng = np.random.default_rng(check_seed(seed, "seed"))
+    corners = check_flag(corners, "corners")
     ts = rng.uniform(*poly.SUN_ZENITH_DOMAIN, size=count)
     tu = rng.uniform(*poly.TURBIDITY_DOMAIN, size=count)
     if corners:
@@ -120,10 +158,13 @@ def held_out_points(count: int, seed: int, corners: bool = True) -> tuple[NDArra
 
 def edge_points(per_edge: int, seed: int) -> tuple[NDArray, NDArray]:
     """``per_edge`` uniform random points on each of the domain's four edges (seeded)."""
-    u = np.random.default_rng(seed).uniform(0.0, 1.0, (4, per_edge))
+    per_edge = check_count(per_edge, "per_edge", 0, MAX_ARRAY_ELEMENTS // 4)
+    u = np.random.default_rng(check_seed(seed, "seed")).uniform(0.0, 1.0, (4, per_edge))
     (lo_s, hi_s), (lo_t, hi_t) = poly.SUN_ZENITH_DOMAIN, poly.TURBIDITY_DOMAIN
-    ts = np.concatenate([lo_s + (hi_s - lo_s) * u[0], lo_s + (hi_s - lo_s) * u[1], np.full(per_edge, lo_s), np.full(per_edge, hi_s)])
-    tu = np.concatenate([np.full(per_edge, lo_t), np.full(per_edge, hi_t), lo_t + (hi_t - lo_t) * u[2], lo_t + (hi_t - lo_t) * u[3]])
+    ts = np.concatenate([lo_s + (hi_s - lo_s) * u[0], lo_s + (hi_s - lo_s) * u[1],
+                         np.full(per_edge, lo_s), np.full(per_edge, hi_s)])
+    tu = np.concatenate([np.full(per_edge, lo_t), np.full(per_edge, hi_t),
+                         lo_t + (hi_t - lo_t) * u[2], lo_t + (hi_t - lo_t) * u[3]])
     return ts, tu
 
 
@@ -333,12 +374,65 @@ def choose_degrees(
     return chosen
 
 
+def _report(predicted: NDArray, truth: NDArray, denominator: NDArray, lmin: NDArray, points: tuple[NDArray, NDArray],
+            bands: int) -> dict[str, Any]:
+    """The sky's held-out error report: E_mean, E_max and DC error per band count, and the floored channels."""
+    report: dict[str, Any] = {"held_out_points": int(truth.shape[0]), "by_bands": {}}
+    for n in range(1, bands + 1):
+        measures = error_measures(predicted, truth, denominator, n)
+        worst = int(np.argmax(measures["e_mean"]))
+        report["by_bands"][str(n)] = {
+            "e_mean_worst": float(measures["e_mean"].max()),
+            "e_mean_mean": float(measures["e_mean"].mean()),
+            "e_max_worst": float(measures["e_max"].max()),
+            "dc_worst": float(measures["dc"].max()),
+            "worst_at": [float(points[0][worst]), float(points[1][worst])],
+        }
+    report["floored_channels"] = int(np.sum(lmin[:, :3] < LMIN_FLOOR * lmin[:, 3:4]))
+    return report
+
+
+def _sky_metadata(settings: FitSettings, degrees: NDArray, tolerance: float | None, condition: float,
+                  report: dict[str, Any]) -> dict[str, Any]:
+    """The file's metadata for the sky: conventions, the runtime fields, settings and the held-out report."""
+    return {
+        "description": "Chebyshev fit of the SH projection of the Preetham (1999) sky (Habel et al. 2008)",
+        "conventions": {
+            "sh": "real orthonormal, Condon-Shortley phase, index l(l+1)+m; stored rows m >= 0 only",
+            "frame": "right-handed, Z up; sun at azimuth 0 (+X); runtime rotates about Z (Habel eq. 4)",
+            "units": "cd/m^2 (linear RGB; R = G = B = Y for the colourspace's white)",
+        },
+        # The fields the runtime relies on (coefficient_file.RUNTIME_FIELDS), checked when the file is read.
+        "colourspace": settings.colourspace,
+        "domain": coefficient_file.DOMAIN,
+        "basis": coefficient_file.BASIS,
+        "term_order": coefficient_file.TERM_ORDER,
+        "degrees": degrees.tolist(),
+        "bands": int(degrees.shape[0]),
+        "requested_degrees": list(settings.degrees),
+        "tolerance": tolerance,
+        "weighting": "residuals divided by L_min per point and channel (seed eq. 3); floor "
+        f"{LMIN_FLOOR} x min luminance",
+        "condition_number": condition,
+        "grid": {"kind": "Chebyshev-Gauss nodes", "shape": list(settings.grid)},
+        "projection": {
+            "method": settings.method,
+            "samples": settings.samples,
+            "seed": settings.seed,
+            "quadrature_theta_nodes": preetham.SKY_SH_THETA_NODES if settings.samples is None else None,
+        },
+        "held_out": {"count": settings.held_out, "seed": settings.seed, "corners": True},
+        "settings": asdict(settings),
+        "errors": report,
+    }
+
+
 def build(
     settings: FitSettings,
     tolerance: float | None = None,
     mapper: Callable[[Callable, Iterable], Iterable] = map,
     provenance: dict[str, Any] | None = None,
-) -> tuple[SkyTable, dict[str, Any], dict[str, NDArray]]:
+) -> tuple[SkyTable, dict[str, Any], dict[str, tuple[NDArray, ...]]]:
     """
     Project, fit, measure: the whole offline pipeline.
 
@@ -358,7 +452,9 @@ def build(
     Returns
     -------
     table, report, samples
-        The :class:`SkyTable` (with metadata), the held-out error report (also
+        The :class:`SkyTable` (with metadata, and the sun's table of
+        :func:`build_sun` under ``tables["sun"]``, its block under the
+        metadata's ``"tables"``), the sky's held-out error report (also
         stored in the metadata under ``"errors"``), and the projected samples
         (``grid`` and ``test`` tuples of sun_zenith, turbidity, coeffs,
         denominator) for further study (:func:`compare_variants`).
@@ -390,69 +486,24 @@ def build(
     coeffs, lmin = project_points(points_ts, points_tu, settings, mapper)
     denominator = error_denominator(lmin)
     n_grid, n_test = grid_ts.size, test_ts.size
-    g = slice(0, n_grid)
-    t = slice(n_grid, n_grid + n_test)
+    g, t = slice(0, n_grid), slice(n_grid, n_grid + n_test)
     if tolerance is None:
         degrees = np.tile(np.asarray(settings.degrees, dtype=np.int64), (settings.bands, 1))
     else:
         v = slice(n_grid + n_test, None)
-        degrees = choose_degrees(
-            tolerance,
-            settings.bands,
-            settings.degrees,
-            (grid_ts, grid_tu, coeffs[g], denominator[g]),
-            (points_ts[v], points_tu[v], coeffs[v], denominator[v]),
-        )
+        degrees = choose_degrees(tolerance, settings.bands, settings.degrees, (grid_ts, grid_tu, coeffs[g], denominator[g]),
+                                 (points_ts[v], points_tu[v], coeffs[v], denominator[v]))
     table, condition = fit_table(grid_ts, grid_tu, coeffs[g], denominator[g], degrees)
     predicted = evaluate_table(table, degrees, test_ts, test_tu)
-    report: dict[str, Any] = {"held_out_points": int(n_test), "by_bands": {}}
-    for bands in range(1, settings.bands + 1):
-        measures = error_measures(predicted, coeffs[t], denominator[t], bands)
-        worst = int(np.argmax(measures["e_mean"]))
-        report["by_bands"][str(bands)] = {
-            "e_mean_worst": float(measures["e_mean"].max()),
-            "e_mean_mean": float(measures["e_mean"].mean()),
-            "e_max_worst": float(measures["e_max"].max()),
-            "dc_worst": float(measures["dc"].max()),
-            "worst_at": [float(test_ts[worst]), float(test_tu[worst])],
-        }
-    report["floored_channels"] = int(np.sum(lmin[t, :3] < LMIN_FLOOR * lmin[t, 3:4]))
-    metadata: dict[str, Any] = {
-        "description": "Chebyshev fit of the SH projection of the Preetham (1999) sky (Habel et al. 2008)",
-        "conventions": {
-            "sh": "real orthonormal, Condon-Shortley phase, index l(l+1)+m; stored rows m >= 0 only",
-            "frame": "right-handed, Z up; sun at azimuth 0 (+X); runtime rotates about Z (Habel eq. 4)",
-            "units": "cd/m^2 (linear RGB; R = G = B = Y for the colourspace's white)",
-        },
-        # The fields the runtime relies on (coefficient_file.RUNTIME_FIELDS), checked when the file is read.
-        "colourspace": settings.colourspace,
-        "domain": coefficient_file.DOMAIN,
-        "basis": coefficient_file.BASIS,
-        "term_order": coefficient_file.TERM_ORDER,
-        "degrees": degrees.tolist(),
-        "bands": int(degrees.shape[0]),
-        "requested_degrees": list(settings.degrees),
-        "tolerance": tolerance,
-        "weighting": "residuals divided by L_min per point and channel (seed eq. 3); floor "
-        f"{LMIN_FLOOR} x min luminance",
-        "condition_number": condition,
-        "grid": {"kind": "Chebyshev-Gauss nodes", "shape": list(settings.grid)},
-        "projection": {
-            "method": settings.method,
-            "samples": settings.samples,
-            "seed": settings.seed,
-            "quadrature_theta_nodes": preetham.SKY_SH_THETA_NODES if settings.samples is None else None,
-        },
-        "held_out": {"count": settings.held_out, "seed": settings.seed, "corners": True},
-        "settings": asdict(settings),
-        "errors": report,
-    }
+    report = _report(predicted, coeffs[t], denominator[t], lmin[t], (test_ts, test_tu), settings.bands)
+    metadata = _sky_metadata(settings, degrees, tolerance, condition, report)
     metadata.update(provenance or {})
-    samples = {
-        "grid": (grid_ts, grid_tu, coeffs[g], denominator[g]),
-        "test": (test_ts, test_tu, coeffs[t], denominator[t]),
+    sun, sun_block = build_sun(settings, preetham.rgb_from_xyz_matrix(settings.colourspace))
+    metadata["tables"] = {"sun": sun_block}
+    samples: dict[str, tuple[NDArray, ...]] = {
+        "grid": (grid_ts, grid_tu, coeffs[g], denominator[g]), "test": (test_ts, test_tu, coeffs[t], denominator[t]),
     }
-    return SkyTable(table=table, degrees=degrees, metadata=metadata), report, samples
+    return SkyTable(table=table, degrees=degrees, metadata=metadata, tables={"sun": sun}), report, samples
 
 
 VARIANTS: dict[str, tuple[bool, bool]] = {
@@ -480,3 +531,163 @@ def compare_variants(samples: dict[str, tuple], degrees: tuple[int, int], bands:
             row[f"e_mean_mean_{n}"] = float(e.mean())
         rows.append(row)
     return rows
+
+
+# --------------------------------------------------------------------------- #
+# The sun's table (format version 3)
+# --------------------------------------------------------------------------- #
+SUN_ERROR_DEFINITION: str = (
+    "held out, worst over points: xyz = max |XYZ_fit,c / XYZ_c - 1| per channel (strict: XYZ > 0); "
+    "rgb = max |RGB_fit,c - RGB_c| / max(|RGB_c|, Y) per channel in the file's colourspace, floored at the "
+    "point's luminance Y because near the horizon a channel outside the gamut crosses zero"
+)
+"""How the sun table's held-out errors in the file's metadata are defined."""
+
+
+def zenith_of_air_mass(m: NDArray) -> NDArray[np.float64]:
+    """
+    Sun zeniths (radians) whose Kasten air mass (:func:`skysh.sunlight.air_mass`) is ``m``, in [m0, m1].
+
+    Bisection on [0, pi/2] to float precision (64 halvings of pi/2 reach 8.5e-20).
+    Kasten's m dips slightly (< 1e-7) below m0 just above the zenith; for m in
+    that range the largest solution is returned (the air mass, all that matters, is ``m``).
+    """
+    m = np.asarray(m, dtype=np.float64)
+    lo, hi = np.zeros_like(m), np.full_like(m, poly.SUN_ZENITH_DOMAIN[1])
+    for _ in range(64):
+        mid = 0.5 * (lo + hi)
+        below = sunlight.air_mass(mid) < m
+        lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
+    return 0.5 * (lo + hi)
+
+
+def _from_variables(x: NDArray, y: NDArray) -> tuple[NDArray, NDArray]:
+    """(sun zenith, turbidity) of the sun table's variables x, y in [-1, 1]."""
+    m0, m1 = sunlight.SUN_AIR_MASS_RANGE
+    (t0, t1) = poly.TURBIDITY_DOMAIN
+    return zenith_of_air_mass(m0 + 0.5 * (x + 1.0) * (m1 - m0)), t0 + 0.5 * (y + 1.0) * (t1 - t0)
+
+
+def sun_grid(grid: tuple[int, int]) -> tuple[NDArray, NDArray]:
+    """The sun table's fitting grid: ``grid[0] x grid[1]`` Chebyshev-Gauss nodes of (x, y) as (sun zenith, turbidity)."""
+    def nodes(n: int) -> NDArray:
+        return -np.cos((2 * np.arange(n) + 1) * math.pi / (2 * n))
+
+    x, y = np.meshgrid(nodes(grid[0]), nodes(grid[1]), indexing="ij")
+    return _from_variables(x.ravel(), y.ravel())
+
+
+def sun_held_out_points(count: int, seed: int) -> tuple[NDArray, NDArray]:
+    """
+    Held-out points of the sun table (seeded): ``count`` uniform in (sun zenith, T), ``count`` uniform in
+    (air mass, T), ``count // 8`` uniform on each of the four edges, and the four corners.
+    """
+    ts, tu = held_out_points(count, seed, corners=False)
+    rng = np.random.default_rng(seed + 3)  # another stream: not the zeniths above in another variable
+    mx, mt = _from_variables(rng.uniform(-1.0, 1.0, count), rng.uniform(-1.0, 1.0, count))
+    es, et = edge_points(count // 8, seed + 1)
+    cs, ct = np.repeat(poly.SUN_ZENITH_DOMAIN, 2), np.tile(poly.TURBIDITY_DOMAIN, 2)
+    return np.concatenate([ts, mx, es, cs]), np.concatenate([tu, mt, et, ct])
+
+
+def _sun_design(sun_zenith: NDArray, turbidity: NDArray, degrees: tuple[int, int]) -> NDArray:
+    """(P, (d_x + 1)(d_y + 1)) products T_i(x) T_j(y) of the sun table's variables, term i (d_y + 1) + j."""
+    x, y = sunlight.sun_variables(sun_zenith, turbidity)
+    tx, ty = poly.chebyshev(x, degrees[0]), poly.chebyshev(y, degrees[1])
+    return (tx[:, :, None] * ty[:, None, :]).reshape(x.shape[0], -1)
+
+
+def fit_sun_table(sun_zenith: NDArray, turbidity: NDArray, xyz: NDArray, degrees: tuple[int, int]) -> tuple[NDArray, float]:
+    """
+    Least-squares fit of ln XYZ (equal weights: relative errors) in the sun table's form.
+
+    Parameters
+    ----------
+    sun_zenith, turbidity
+        (P,) points (radians; turbidity).
+    xyz
+        (P, 3) CIE XYZ of the direct normal illuminance at the points, lux (> 0).
+    degrees
+        (d_x, d_y).
+
+    Returns
+    -------
+    table, condition
+        ((d_x + 1)(d_y + 1), 1, 3) Chebyshev coefficients of ln XYZ
+        (:data:`skysh.sunlight.SUN_BASIS`), and the design's condition number.
+    """
+    design = _sun_design(sun_zenith, turbidity, degrees)
+    solution, _, _, singular = np.linalg.lstsq(design, np.log(xyz), rcond=None)
+    return solution[:, None, :], float(singular[0] / singular[-1])
+
+
+def evaluate_sun_table(table: NDArray, degrees: tuple[int, int], sun_zenith: NDArray, turbidity: NDArray) -> NDArray:
+    """The fitted XYZ (P, 3), lux, at points (the offline twin of :meth:`skysh.sunlight.SunLight.xyz`)."""
+    return np.exp(_sun_design(sun_zenith, turbidity, degrees) @ np.asarray(table)[:, 0, :])
+
+
+def sun_errors(fitted: NDArray, truth: NDArray, rgb_from_xyz: NDArray, points: tuple[NDArray, NDArray]) -> dict[str, Any]:
+    """
+    Held-out errors of the sun table (:data:`SUN_ERROR_DEFINITION`).
+
+    Parameters
+    ----------
+    fitted, truth
+        (P, 3) XYZ, lux.
+    rgb_from_xyz
+        (3, 3) XYZ -> RGB of the file's colourspace.
+    points
+        (sun zenith, turbidity), (P,) each: where the worst error sits.
+    """
+    xyz = np.abs(fitted / truth - 1.0)
+    rgb_truth = truth @ rgb_from_xyz.T
+    rgb = np.abs((fitted - truth) @ rgb_from_xyz.T) / np.maximum(np.abs(rgb_truth), truth[:, 1:2])
+    worst = int(np.argmax(np.maximum(xyz.max(axis=1), rgb.max(axis=1))))
+    return {
+        "held_out_points": int(truth.shape[0]),
+        "xyz_relative_worst": xyz.max(axis=0).tolist(),
+        "xyz_relative_mean": xyz.mean(axis=0).tolist(),
+        "rgb_relative_worst": rgb.max(axis=0).tolist(),
+        "worst": float(max(xyz.max(), rgb.max())),
+        "worst_at": [float(points[0][worst]), float(points[1][worst])],
+        "definition": SUN_ERROR_DEFINITION,
+    }
+
+
+def build_sun(settings: FitSettings, rgb_from_xyz: NDArray) -> tuple[NamedTable, dict[str, Any]]:
+    """
+    The sun's table and its metadata block (deterministic: no random projection involved).
+
+    Evaluates :func:`skysh.solar.illuminance_xyz` (the spectral model) on
+    :func:`sun_grid` ``(settings.sun_grid)``, fits :func:`fit_sun_table` of
+    ``settings.sun_degrees`` and measures it on :func:`sun_held_out_points`
+    ``(settings.sun_held_out, settings.seed)`` (:func:`sun_errors`).
+
+    Returns
+    -------
+    table, block
+        The :class:`~skysh.coefficient_file.NamedTable` and the ``tables.sun``
+        metadata block (``rgb_from_xyz``, degrees, fit settings, condition
+        number, largest channel sum of |coefficients| and the held-out errors).
+    """
+    from skysh import solar  # the spectral model (colour-science on first use)
+
+    degrees = (int(settings.sun_degrees[0]), int(settings.sun_degrees[1]))
+    ts, tu = sun_grid(settings.sun_grid)
+    table, condition = fit_sun_table(ts, tu, solar.illuminance_xyz(ts, tu), degrees)
+    hs, hu = sun_held_out_points(settings.sun_held_out, settings.seed)
+    errors = sun_errors(evaluate_sun_table(table, degrees, hs, hu), solar.illuminance_xyz(hs, hu), rgb_from_xyz, (hs, hu))
+    block = {
+        "description": "ln CIE XYZ (lux) of the sun's direct normal illuminance (Preetham et al. 1999 appendix, "
+        "skysh.solar), 2D Chebyshev in the air-mass and turbidity variables",
+        "rgb_from_xyz": np.asarray(rgb_from_xyz, dtype=np.float64).tolist(),
+        "degrees": [list(degrees)],
+        "fit": "least squares of ln XYZ, equal weights (relative errors)",
+        "grid": {"kind": "Chebyshev-Gauss nodes of (x, y)", "shape": list(settings.sun_grid)},
+        "held_out": {"count": int(hs.size), "seed": settings.seed,
+                     "kinds": "uniform in (sun zenith, T); uniform in (air mass, T); the four edges; the corners"},
+        "condition_number": condition,
+        "largest_abs_sum": float(np.abs(table).sum(axis=0).max()),
+        "errors": errors,
+    }
+    return NamedTable(table=table, degrees=np.array([degrees], dtype=np.int64)), block

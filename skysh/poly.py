@@ -21,11 +21,23 @@ Term layout (as a comprehension)::
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["SUN_ZENITH_DOMAIN", "TURBIDITY_DOMAIN", "scale", "chebyshev", "design", "term_index", "n_terms"]
+from skysh._checks import as_float_array, check_count, check_flag, check_size, short_repr
+
+__all__ = [
+    "SUN_ZENITH_DOMAIN",
+    "TURBIDITY_DOMAIN",
+    "MAX_DEGREE",
+    "scale",
+    "chebyshev",
+    "design",
+    "term_index",
+    "n_terms",
+]
 
 SUN_ZENITH_DOMAIN: tuple[float, float] = (0.0, math.pi / 2.0)
 """Fitted sun zenith angles, radians (sun at the zenith to sun on the horizon)."""
@@ -34,12 +46,30 @@ TURBIDITY_DOMAIN: tuple[float, float] = (2.5, 6.0)
 """Fitted turbidities (Habel 2008 after Zotti et al. 2007: the model is unusable below 2.5)."""
 
 
+MAX_DEGREE: int = 64
+"""Largest polynomial degree accepted in either variable (the shipped file uses (13, 7); the
+coefficient file format allows 31)."""
+
 _LOG_TURBIDITY: tuple[float, float] = (math.log(TURBIDITY_DOMAIN[0]), math.log(TURBIDITY_DOMAIN[1]))
 
 
 def scale(sun_zenith: ArrayLike, turbidity: ArrayLike, log_turbidity: bool = True) -> tuple[NDArray, NDArray]:
     """
     Map the domain onto [-1, 1]^2: x affine in sun zenith, y affine in log(turbidity).
+
+    Parameters
+    ----------
+    sun_zenith, turbidity
+        Radians and turbidity, finite, broadcasting; not range-checked (points
+        outside the domain map outside [-1, 1]). ``turbidity > 0`` when
+        ``log_turbidity``. Empty arrays give empty results.
+    log_turbidity
+        y affine in log(turbidity) (default, as shipped) or in turbidity (a bool).
+
+    Returns
+    -------
+    x, y
+        Arrays of the shapes of ``sun_zenith`` and ``turbidity``.
 
     Notes
     -----
@@ -50,9 +80,18 @@ def scale(sun_zenith: ArrayLike, turbidity: ArrayLike, log_turbidity: bool = Tru
     1.25e-3 -> 4.1e-5 at degree (13, 7), printed by ``tools/fit_sky.py
     --compare-scalings``).
     """
+    log_turbidity = check_flag(log_turbidity, "log_turbidity")
+    ts = as_float_array(sun_zenith, "sun_zenith")
+    t = as_float_array(turbidity, "turbidity")
+    if log_turbidity and t.size and t.min() <= 0.0:
+        raise ValueError(f"turbidity must be > 0 (its log is taken), got {float(t.min())!r}")
+    return _scale(ts, t, log_turbidity)
+
+
+def _scale(ts: NDArray, t: NDArray, log_turbidity: bool = True) -> tuple[NDArray, NDArray]:
+    """:func:`scale` of checked float64 arrays."""
     lo_s, hi_s = SUN_ZENITH_DOMAIN
-    x = (2.0 * np.asarray(sun_zenith, dtype=np.float64) - (lo_s + hi_s)) / (hi_s - lo_s)
-    t = np.asarray(turbidity, dtype=np.float64)
+    x = (2.0 * ts - (lo_s + hi_s)) / (hi_s - lo_s)
     if log_turbidity:
         lo_t, hi_t = _LOG_TURBIDITY
         t = np.log(t)
@@ -63,8 +102,20 @@ def scale(sun_zenith: ArrayLike, turbidity: ArrayLike, log_turbidity: bool = Tru
 
 
 def chebyshev(x: ArrayLike, degree: int) -> NDArray[np.float64]:
-    """Chebyshev polynomials T_0 .. T_degree at ``x``: shape (..., degree + 1)."""
-    x = np.asarray(x, dtype=np.float64)
+    """
+    Chebyshev polynomials T_0 .. T_degree at ``x``: shape (..., degree + 1).
+
+    ``x`` is finite, any shape (empty gives empty); ``degree`` an integer in
+    [0, :data:`MAX_DEGREE`].
+    """
+    degree = check_count(degree, "degree", 0, MAX_DEGREE)
+    x = as_float_array(x, "x")
+    check_size(x.size * (degree + 1), "x", f"T_0 .. T_{degree} at {x.size:,} points")
+    return _chebyshev(x, degree)
+
+
+def _chebyshev(x: NDArray, degree: int) -> NDArray[np.float64]:
+    """:func:`chebyshev` of a checked float64 array."""
     out = np.empty(x.shape + (degree + 1,))
     out[..., 0] = 1.0
     if degree >= 1:
@@ -74,14 +125,28 @@ def chebyshev(x: ArrayLike, degree: int) -> NDArray[np.float64]:
     return out
 
 
+def _degrees(degrees: Any, name: str = "degrees") -> tuple[int, int]:
+    """(d_theta, d_tau) as ints, each in [0, MAX_DEGREE]."""
+    try:
+        d_theta, d_tau = degrees
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"{name} must be a pair of integers (d_theta, d_tau) in [0, {MAX_DEGREE}], got {short_repr(degrees)}"
+        ) from None
+    return check_count(d_theta, f"{name}[0]", 0, MAX_DEGREE), check_count(d_tau, f"{name}[1]", 0, MAX_DEGREE)
+
+
 def n_terms(degrees: tuple[int, int]) -> int:
-    """Number of terms of a polynomial of degrees (d_theta, d_tau)."""
-    return (degrees[0] + 1) * (degrees[1] + 1)
+    """Number of terms of a polynomial of degrees (d_theta, d_tau), integers in [0, :data:`MAX_DEGREE`]."""
+    d_theta, d_tau = _degrees(degrees)
+    return (d_theta + 1) * (d_tau + 1)
 
 
 def term_index(i: int, j: int, degrees: tuple[int, int]) -> int:
-    """Flat index of the term T_i(x) T_j(y) in a design of degrees (d_theta, d_tau)."""
-    return i * (degrees[1] + 1) + j
+    """Flat index of the term T_i(x) T_j(y) in a design of degrees (d_theta, d_tau); 0 <= i <= d_theta, 0 <= j <= d_tau."""
+    d_theta, d_tau = _degrees(degrees)
+    i, j = check_count(i, "i", 0, d_theta), check_count(j, "j", 0, d_tau)
+    return i * (d_tau + 1) + j
 
 
 def design(
@@ -93,19 +158,29 @@ def design(
     Parameters
     ----------
     sun_zenith, turbidity
-        Radians and turbidity, broadcasting to (...,). Not range-checked here.
+        Radians and turbidity, broadcasting to (...,). Not range-checked here
+        (as :func:`scale`). Empty arrays give an empty design.
     degrees
-        (d_theta, d_tau).
+        (d_theta, d_tau), integers in [0, :data:`MAX_DEGREE`].
     log_turbidity
-        Chebyshev variable affine in log(turbidity) (default, as shipped) or in turbidity.
+        Chebyshev variable affine in log(turbidity) (default, as shipped) or
+        in turbidity (a bool).
 
     Returns
     -------
     ndarray
         (..., (d_theta + 1) (d_tau + 1)), term (i, j) at ``i (d_tau + 1) + j``.
     """
+    d_theta, d_tau = _degrees(degrees)
     x, y = scale(sun_zenith, turbidity, log_turbidity)
-    x, y = np.broadcast_arrays(x, y)
-    tx = chebyshev(x, degrees[0])
-    ty = chebyshev(y, degrees[1])
-    return (tx[..., :, None] * ty[..., None, :]).reshape(x.shape + (n_terms(degrees),))
+    try:
+        x, y = np.broadcast_arrays(x, y)
+    except ValueError:
+        raise ValueError(
+            f"sun_zenith and turbidity must broadcast together, got shapes {np.shape(x)} and {np.shape(y)}"
+        ) from None
+    terms = (d_theta + 1) * (d_tau + 1)
+    check_size(x.size * terms, "sun_zenith", f"{terms} terms at {x.size:,} points")
+    tx = _chebyshev(x, d_theta)
+    ty = _chebyshev(y, d_tau)
+    return (tx[..., :, None] * ty[..., None, :]).reshape(x.shape + (terms,))

@@ -33,17 +33,28 @@ References
 from __future__ import annotations
 
 import math
-from functools import lru_cache
-from typing import TYPE_CHECKING, Any
+import warnings
+from functools import cache
+from types import ModuleType
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from skysh import sh
-from skysh._checks import check_bands, check_choice, check_dirs, check_range
-
-if TYPE_CHECKING:  # pragma: no cover
-    pass
+from skysh._checks import (
+    MAX_ARRAY_ELEMENTS,
+    as_float_array,
+    check_bands,
+    check_choice,
+    check_count,
+    check_dirs,
+    check_range,
+    check_scalar,
+    check_seed,
+    check_size,
+    short_repr,
+)
 
 __all__ = [
     "SUN_ZENITH_RANGE",
@@ -112,32 +123,82 @@ SKY_SH_THETA_NODES: int = 64
 product rule to better than 1e-7 of the DC term for bands <= 7."""
 
 
+_COLOUR_MATPLOTLIB_WARNING: str = r'"Matplotlib" related API features are not available'
+"""Start of the message colour-science emits on import when matplotlib is absent: skysh
+plots nothing, so the warning is noise to its users and is filtered around the import."""
+
+
+def _colour() -> ModuleType:
+    """colour-science, imported on first use without its side effects on the user's session.
+
+    Its "matplotlib not available" warning is filtered (skysh plots nothing), and numpy's
+    print options, which colour-science's import switches to the 1.13 legacy mode for the
+    whole process, are put back as they were.
+    """
+    options = np.get_printoptions()
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=_COLOUR_MATPLOTLIB_WARNING)
+        import colour  # heavy (about 1.5 s); imported only when a colour conversion is needed
+    np.set_printoptions(**options)
+    return colour
+
+
 def _check_sun(sun_zenith: ArrayLike, turbidity: ArrayLike) -> tuple[NDArray, NDArray]:
     ts = check_range(sun_zenith, "sun_zenith", *SUN_ZENITH_RANGE, unit="rad")
     t = check_range(turbidity, "turbidity", *TURBIDITY_RANGE)
+    try:
+        shape = np.broadcast_shapes(ts.shape, t.shape)
+    except ValueError:
+        raise ValueError(f"sun_zenith and turbidity must broadcast together, got shapes {ts.shape} and {t.shape}") from None
+    check_size(4 * math.prod(shape), "sun_zenith" if ts.size >= t.size else "turbidity", "the broadcast sky points")
     return ts, t
 
 
 def perez_coefficients(turbidity: ArrayLike) -> NDArray[np.float64]:
-    """Perez A..E for x, y, Y at ``turbidity``: shape (..., 3, 5), quantities ordered (x, y, Y)."""
-    t = np.asarray(turbidity, dtype=np.float64)[..., None, None]
-    return _PEREZ_ALL[..., 0] * t + _PEREZ_ALL[..., 1]
+    """Perez A..E for x, y, Y at ``turbidity`` in [1.7, 10]: shape (..., 3, 5), quantities ordered (x, y, Y)."""
+    t = check_range(turbidity, "turbidity", *TURBIDITY_RANGE)
+    check_size(15 * t.size, "turbidity")
+    return _PEREZ_ALL[..., 0] * t[..., None, None] + _PEREZ_ALL[..., 1]
 
 
 def perez(cos_theta: ArrayLike, gamma: ArrayLike, cos_gamma: ArrayLike, coefficients: ArrayLike) -> NDArray[np.float64]:
     """
     Perez distribution F = (1 + A exp(B / cos theta)) (1 + C exp(D gamma) + E cos^2 gamma).
 
-    ``coefficients`` has A..E on its last axis. ``cos_theta <= 0`` gives
-    exp(B / cos theta) = 0 (B < 0 in the model's domain), the horizon limit.
+    ``cos_theta`` and ``cos_gamma`` in [-1, 1], ``gamma`` in [0, pi] radians and
+    ``coefficients`` (A..E on its last axis, shape (..., 5)) broadcast together;
+    empty arrays give an empty result. ``cos_theta <= 0`` gives exp(B / cos theta)
+    = 0 (B < 0 in the model's domain), the horizon limit. A result that is not
+    finite (coefficients far outside the model's) is refused.
     """
-    a, b, c, d, e = np.moveaxis(np.asarray(coefficients, dtype=np.float64), -1, 0)
-    ct = np.asarray(cos_theta, dtype=np.float64)
+    k = as_float_array(coefficients, "coefficients")
+    if k.ndim == 0 or k.shape[-1] != 5:
+        raise ValueError(f"coefficients must have shape (..., 5) (Perez A..E), got {k.shape}")
+    ct = check_range(cos_theta, "cos_theta", -1.0, 1.0)
+    g = check_range(gamma, "gamma", 0.0, math.pi, unit="rad")
+    cg = check_range(cos_gamma, "cos_gamma", -1.0, 1.0)
+    try:
+        shape = np.broadcast_shapes(ct.shape, g.shape, cg.shape, k.shape[:-1])
+    except ValueError:
+        raise ValueError(
+            f"cos_theta, gamma, cos_gamma and coefficients[..., 0] must broadcast together, got shapes {ct.shape}, "
+            f"{g.shape}, {cg.shape} and {k.shape[:-1]}"
+        ) from None
+    check_size(math.prod(shape), "cos_theta")
+    with np.errstate(over="ignore", invalid="ignore"):
+        out = _perez(ct, g, cg, k)
+    if not np.all(np.isfinite(out)):
+        raise ValueError("coefficients give a Perez value that is not finite (exp overflows): use the model's A..E")
+    return out
+
+
+def _perez(ct: NDArray, gamma: NDArray, cg: NDArray, coefficients: NDArray) -> NDArray[np.float64]:
+    """:func:`perez` of checked float64 arrays."""
+    a, b, c, d, e = np.moveaxis(coefficients, -1, 0)
     positive = ct > 0.0
     with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
         horizon = np.where(positive, np.exp(b / np.where(positive, ct, 1.0)), 0.0)
-    cg = np.asarray(cos_gamma, dtype=np.float64)
-    return (1.0 + a * horizon) * (1.0 + c * np.exp(d * np.asarray(gamma)) + e * cg * cg)
+    return (1.0 + a * horizon) * (1.0 + c * np.exp(d * gamma) + e * cg * cg)
 
 
 def zenith_luminance(sun_zenith: ArrayLike, turbidity: ArrayLike) -> NDArray[np.float64]:
@@ -217,16 +278,15 @@ def xyY(dirs: ArrayLike, sun_zenith: float, sun_azimuth: float, turbidity: float
     Returns
     -------
     ndarray
-        (..., 3): chromaticity x, y and luminance Y in cd/m^2. Below the horizon
+        (..., 3): chromaticity x, y and luminance Y in cd/m^2 (an empty batch of
+        directions gives an empty result). Below the horizon
         (z < 0) Y = 0 and (x, y) is the zenith chromaticity. At the horizon
         (z = 0) Y is the limit of the model, exp(B / cos theta) -> 0.
     """
-    d = check_dirs(dirs)
-    ts, t = _check_sun(sun_zenith, turbidity)
-    phi_s = math.fmod(float(check_range(sun_azimuth, "sun_azimuth", -math.inf, math.inf, unit="rad")), 2.0 * math.pi)
-    if ts.ndim or t.ndim:
-        raise ValueError("sun_zenith and turbidity must be scalars here (use the runtime for batches)")
-    ts, t = float(ts), float(t)
+    d = check_dirs(dirs, per_point=16)
+    ts = check_scalar(sun_zenith, "sun_zenith", *SUN_ZENITH_RANGE, unit="rad")
+    t = check_scalar(turbidity, "turbidity", *TURBIDITY_RANGE)
+    phi_s = math.fmod(check_scalar(sun_azimuth, "sun_azimuth", unit="rad"), 2.0 * math.pi)
     sun = _sun_dir(ts, phi_s)
     # The zenith rides along as the last direction so F(0, theta_s) is computed on
     # exactly the path of every view, and the zenith value is exactly (x_z, y_z, Y_z).
@@ -236,8 +296,8 @@ def xyY(dirs: ArrayLike, sun_zenith: float, sun_azimuth: float, turbidity: float
     # dot product loses half the digits (and the dot product can exceed 1).
     gamma = np.arctan2(np.linalg.norm(np.cross(flat, sun), axis=-1), flat @ sun)
     cos_gamma = np.cos(gamma)
-    coeffs = perez_coefficients(t)  # (3, 5): x, y, Y
-    f = perez(cos_theta[:, None], gamma[:, None], cos_gamma[:, None], coeffs)
+    coeffs = _PEREZ_ALL[..., 0] * t + _PEREZ_ALL[..., 1]  # (3, 5): x, y, Y; as perez_coefficients(t)
+    f = _perez(cos_theta[:, None], gamma[:, None], cos_gamma[:, None], coeffs)
     zenith = np.array([*zenith_chromaticity(ts, t), zenith_luminance(ts, t)])
     values = zenith * (f[:-1] / f[-1])
     values[cos_theta[:-1] < 0.0] = np.array([zenith[0], zenith[1], 0.0])
@@ -249,7 +309,11 @@ def luminance(dirs: ArrayLike, sun_zenith: float, sun_azimuth: float, turbidity:
     return xyY(dirs, sun_zenith, sun_azimuth, turbidity)[..., 2]
 
 
-@lru_cache(maxsize=None)
+def colourspace_names() -> tuple[str, ...]:
+    """The names :func:`rgb_from_xyz_matrix` accepts (colour-science's ``RGB_COLOURSPACES`` keys), sorted."""
+    return tuple(sorted(_colour().RGB_COLOURSPACES.keys(), key=str.lower))
+
+
 def rgb_from_xyz_matrix(colourspace: str = "sRGB") -> NDArray[np.float64]:
     """
     The XYZ -> linear RGB matrix of a colour-science colourspace (no chromatic adaptation).
@@ -257,13 +321,26 @@ def rgb_from_xyz_matrix(colourspace: str = "sRGB") -> NDArray[np.float64]:
     Parameters
     ----------
     colourspace
-        Any key of ``colour.RGB_COLOURSPACES`` ("sRGB", "ITU-R BT.2020", "ACEScg", ...).
-    """
-    import colour  # heavy (about 1.5 s); imported only when a colour conversion is needed
+        Any key of ``colour.RGB_COLOURSPACES`` ("sRGB", "ITU-R BT.2020", "ACEScg", ...;
+        :func:`colourspace_names`). Another name is refused with the list of valid ones.
 
-    if not isinstance(colourspace, str) or colourspace not in colour.RGB_COLOURSPACES:
+    Returns
+    -------
+    ndarray
+        (3, 3), read-only, cached.
+    """
+    if not isinstance(colourspace, str):
+        raise ValueError(f"colourspace must be a colour-science RGB colourspace name (a str), got {short_repr(colourspace)}")
+    return _rgb_from_xyz_matrix(colourspace)
+
+
+@cache
+def _rgb_from_xyz_matrix(colourspace: str) -> NDArray[np.float64]:
+    colour = _colour()
+    if colourspace not in colour.RGB_COLOURSPACES:
         raise ValueError(
-            f"colourspace must be a colour-science RGB colourspace name (colour.RGB_COLOURSPACES), got {colourspace!r}"
+            f"colourspace must be a colour-science RGB colourspace name, got {colourspace!r}; valid names: "
+            + ", ".join(colourspace_names())
         )
     matrix = np.array(colour.RGB_COLOURSPACES[colourspace].matrix_XYZ_to_RGB, dtype=np.float64)
     matrix.flags.writeable = False
@@ -291,11 +368,9 @@ def radiance(
         (..., 3) linear RGB; each channel is in cd/m^2 in the sense that
         R = G = B = Y for a white of the colourspace's whitepoint.
     """
-    import colour
-
     matrix = rgb_from_xyz_matrix(colourspace)
     values = xyY(dirs, sun_zenith, sun_azimuth, turbidity)
-    xyz = colour.xyY_to_XYZ(values)
+    xyz = _colour().xyY_to_XYZ(values)
     return xyz @ matrix.T
 
 
@@ -308,7 +383,8 @@ def sky_quadrature_rule(sun_zenith: float, n_theta: int = SKY_SH_THETA_NODES) ->
     sun_zenith
         Radians, [0, pi/2].
     n_theta
-        Gauss-Legendre nodes per zenith panel; the azimuth gets ``2 * n_theta``.
+        Gauss-Legendre nodes per zenith panel, an integer in [1,
+        :data:`MAX_THETA_NODES`]; the azimuth gets ``2 * n_theta``.
 
     Returns
     -------
@@ -328,8 +404,9 @@ def sky_quadrature_rule(sun_zenith: float, n_theta: int = SKY_SH_THETA_NODES) ->
     [0, pi]: the kink sits on a panel corner, where Gauss rules converge
     quickly, and the horizon (where the sky jumps to zero) is a panel edge.
     """
-    ts = float(check_range(sun_zenith, "sun_zenith", *SUN_ZENITH_RANGE, unit="rad"))
-    nodes, weights = sh.gauss_legendre(int(n_theta))
+    ts = check_scalar(sun_zenith, "sun_zenith", *SUN_ZENITH_RANGE, unit="rad")
+    n_theta = check_count(n_theta, "n_theta", 1, MAX_THETA_NODES)
+    nodes, weights = sh.gauss_legendre(n_theta)
     thetas, theta_weights = [], []
     for low, high in ((0.0, ts), (ts, math.pi / 2.0)):
         if high > low:
@@ -337,7 +414,7 @@ def sky_quadrature_rule(sun_zenith: float, n_theta: int = SKY_SH_THETA_NODES) ->
             theta_weights.append(weights * (high - low) * 0.5)
     theta = np.concatenate(thetas)
     w_theta = np.concatenate(theta_weights) * np.sin(theta)
-    phi_nodes, phi_weights = sh.gauss_legendre(2 * int(n_theta))
+    phi_nodes, phi_weights = sh.gauss_legendre(2 * n_theta)
     phi = 0.5 * math.pi * (phi_nodes + 1.0)
     w_phi = math.pi * phi_weights  # (pi / 2) Jacobian, times 2 for the mirrored half
     st = np.sin(theta)[:, None]
@@ -376,9 +453,16 @@ def sky_sh(
     method
         ``"quadrature"`` (default): the sun-adapted rule of
         :func:`sky_quadrature_rule`, about ``n`` directions (``n_theta =
-        round(sqrt(n / 4))``, default :data:`SKY_SH_THETA_NODES`). ``"mc"``,
-        ``"stratified"``, ``"qmc"``: :func:`skysh.sh.project` over the upper
-        hemisphere with ``n`` samples and ``seed``.
+        max(bands, round(sqrt(n / 4)))``, default :data:`SKY_SH_THETA_NODES`,
+        at most :data:`MAX_THETA_NODES`). ``"mc"``, ``"stratified"``,
+        ``"qmc"``: :func:`skysh.sh.project` over the upper hemisphere with
+        ``n`` samples and ``seed``.
+    n
+        Sample count, an integer >= 1 (see ``method``); the basis at the
+        samples (``n * N * N`` values) must fit
+        :data:`skysh._checks.MAX_ARRAY_ELEMENTS`.
+    seed
+        None or an integer >= 0, for the random methods.
 
     Returns
     -------
@@ -387,17 +471,19 @@ def sky_sh(
     """
     bands = check_bands(bands)
     check_choice(method, "method", sh.PROJECTION_METHODS)
-    ts, t = _check_sun(sun_zenith, turbidity)
-    ts, t = float(ts), float(t)
-    azimuth = math.fmod(float(check_range(sun_azimuth, "sun_azimuth", -math.inf, math.inf, unit="rad")), 2.0 * math.pi)
-    if n is not None and (isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1):
-        raise ValueError(f"n must be a positive integer, got {n!r}")
+    ts = check_scalar(sun_zenith, "sun_zenith", *SUN_ZENITH_RANGE, unit="rad")
+    t = check_scalar(turbidity, "turbidity", *TURBIDITY_RANGE)
+    azimuth = math.fmod(check_scalar(sun_azimuth, "sun_azimuth", unit="rad"), 2.0 * math.pi)
+    seed = check_seed(seed)
+    if n is not None:
+        n = check_count(n, "n", 1, 4 * MAX_THETA_NODES**2 if method == "quadrature" else MAX_ARRAY_ELEMENTS)
     rgb_from_xyz_matrix(colourspace)  # validate the name before the projection
     if method == "quadrature":
         n_theta = SKY_SH_THETA_NODES if n is None else max(bands, round(math.sqrt(n / 4.0)))
+        check_size(4 * n_theta * n_theta * bands * bands, "n" if n is not None else "bands", "the basis at the nodes")
         dirs, weights = sky_quadrature_rule(ts, n_theta)
         values = radiance(dirs, ts, 0.0, t, colourspace)
-        coeffs = (sh.basis(dirs, bands).T * weights) @ values  # .T is the contiguous (K, M) buffer
+        coeffs = (sh._basis(dirs, bands).T * weights) @ values  # .T is the contiguous (K, M) buffer
         coeffs[[sh.index(*sh.lm(i)) for i in range(bands * bands) if sh.lm(i)[1] < 0]] = 0.0
     else:
         coeffs = sh.project(
@@ -405,6 +491,10 @@ def sky_sh(
         )
     return sh.rotate_z(coeffs, azimuth) if azimuth else coeffs
 
+
+MAX_THETA_NODES: int = sh.MAX_GAUSS_NODES // 2
+"""Largest ``n_theta`` of :func:`sky_quadrature_rule` (its azimuth rule has ``2 * n_theta`` nodes,
+at most :data:`skysh.sh.MAX_GAUSS_NODES`): 4 * 512**2, about a million directions."""
 
 _MIN_GRID_STEP: float = math.radians(2.0)
 """Spacing of the coarse grid that seeds :func:`sky_minimum`, radians."""
@@ -440,8 +530,8 @@ def sky_minimum(sun_zenith: float, turbidity: float, colourspace: str = "sRGB") 
     negative: near sunset at low turbidity the sky's chromaticity leaves the
     sRGB gamut (blue about -700 cd/m^2 at sun_zenith = pi/2, turbidity 2.5).
     """
-    ts, t = _check_sun(sun_zenith, turbidity)
-    ts, t = float(ts), float(t)
+    ts = check_scalar(sun_zenith, "sun_zenith", *SUN_ZENITH_RANGE, unit="rad")
+    t = check_scalar(turbidity, "turbidity", *TURBIDITY_RANGE)
     rgb_from_xyz_matrix(colourspace)
 
     def values(theta: NDArray, phi: NDArray) -> NDArray:

@@ -18,70 +18,23 @@ words per colour channel.
 -   :func:`table3_errors`: the seed's Table 3 (L1, L2 and RMSE of the
     reconstructed radiance and irradiance after compression, prior versus
     tight bound, with and without the square root) for any batch of SH.
--   :func:`sample_sky_parameters`, :func:`sky_coefficients`,
-    :func:`table3_experiment`: the same experiment on Preetham sky data.
 -   :class:`QuantizationClampWarning`: issued when a coefficient lies outside
     its bound (then it is clamped; only SH that no non-negative function
     produces can do that).
 
-The bounds
-----------
-For a non-negative ``f``, ``c_lm / c_00 = integral f Y_lm / integral f Y_00`` is
-an average of ``Y_lm(w) / Y_00`` over the sphere with the non-negative weights
-``f(w) Y_00``, so it lies between the minimum and the maximum of ``Y_lm / Y_00``
-(the seed's delta-function argument, section 2.2). Hence ``|c_lm / c_00| <= max
-|Y_lm / Y_00|``, attained by a delta light at the maximising direction:
+The bound of ``|c_lm / c_00|`` is ``max |Y_lm / Y_00|`` over the sphere (the
+seed's delta-function argument, section 2.2): the **prior** bound sqrt(2 l + 1)
+for every coefficient of a band, or the **tight** bound sqrt(15) / 2 for the four
+non-zonal quadratics (section 3.2, Table 2). Irradiance coefficients shrink it by
+``A_l / A_0``. Field ``j = k - 1`` of coefficient ``k`` sits in word
+``j // (32 // bits)``; a field holds ``round(bv (v + 1))``, ``bv = 2^(bits - 1) - 1``.
+The derivation of the bounds, the table of words per bit depth, the rounding and
+the square-root option are in docs/quantize.md; the measurement on sky data is a
+study (``tools/studies/quantize_study.py``).
 
--   ``l = 1`` and the zonal ``Y(2, 0)``: the maximum is at the poles of the
-    function's own axis, ``Y_l0(+Z) / Y_00 = sqrt(2 l + 1) P_l(1) =
-    sqrt(2 l + 1)``: sqrt(3) and sqrt(5) (the **prior** bound, used for every
-    coefficient of a band).
--   The four non-zonal quadratic ``Y(2, +-1), Y(2, +-2)``: ``Y / Y_00`` is
-    ``sqrt(15) x y``, ``-sqrt(15) y z``, ``-sqrt(15) x z`` and ``(sqrt(15) / 2)
-    (x^2 - y^2)``; on the sphere ``|x y| <= (x^2 + y^2) / 2 <= 1 / 2`` and
-    ``|x^2 - y^2| <= 1``, so the maximum is **sqrt(15) / 2** (the **tight**
-    bound, seed section 3.2), about 13 % below sqrt(5).
-
-The zonal ``Y(2, 0) / Y_00 = (sqrt(5) / 2) (3 z^2 - 1)`` ranges over
-``[-sqrt(5) / 2, sqrt(5)]``: its bound is asymmetric (seed Table 2: -1.1180 at
-the equator). The codec, like the seed, keeps the symmetric range.
-
-Irradiance (``irradiance=True``): the coefficients are those of the clamped-
-cosine convolution ``E_lm = A_l L_lm`` of a non-negative radiance, so the ratio
-bounds shrink by ``A_l / A_0``: 2/3 for l = 1 and 1/4 for l = 2 (the seed's
-``isIrrad`` factors).
-
-Layout of ``words``
--------------------
-Coefficient ``k = 1 .. 8`` becomes field ``j = k - 1``; field ``j`` sits in word
-``j // F`` at bit offset ``bits * (j % F)`` with ``F = 32 // bits`` fields per
-word. Unused high bits are zero. Words per channel ``W = ceil(8 / F)``:
-
-=========  ===  ===
-bits       F    W
-=========  ===  ===
-2 .. 4     >=8  1
-5, 6       6, 5 2
-7, 8       4    2
-9, 10      3    3
-11 .. 16   2    4
-17 .. 32   1    8
-=========  ===  ===
-
-A field holds ``round(bv (v + 1))`` with ``bv = 2^(bits - 1) - 1``, i.e. the
-codes 0 .. 2 bv (0 = -1, bv = exactly 0, 2 bv = +1); the code ``2^bits - 1`` is
-never produced and :func:`decompress` refuses it. Rounding is to nearest (ties
-up): ``floor(bv + 0.5 + v bv)``, as in Listing 1.
-
-With ``sqrt=True`` the value stored is ``sign(v) sqrt(|v|)`` and the decoder
-squares it back (the seed's square-root option; not for data that will be
-interpolated in its packed form).
-
-Conventions: orthonormal real SH with the Condon-Shortley phase (CONVENTIONS.md),
+Conventions: orthonormal real SH with the Condon-Shortley phase (docs/conventions.md),
 the same as the seed's Table 1, so no conversion is needed. Coefficient arrays
-are (..., 9, C). Computation is in float64 (the shader in Listing 1 is float32:
-a float32 encoder can land one code away for a value within float32 rounding
-of a rounding boundary).
+are (..., 9, C), computed in float64.
 
 References
 ----------
@@ -98,14 +51,14 @@ from __future__ import annotations
 
 import math
 import warnings
-from functools import lru_cache
+from functools import cache
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from skysh import sh
-from skysh._checks import as_float_array, check_choice, check_range
+from skysh._checks import as_float_array, check_choice, check_flag
 
 __all__ = [
     "BOUND_NAMES",
@@ -116,7 +69,6 @@ __all__ = [
     "IRRADIANCE_FACTORS",
     "CLAMP_TOLERANCE",
     "TABLE3_THETA_NODES",
-    "SKY_SOURCES",
     "QuantizationClampWarning",
     "bounds",
     "ratios",
@@ -124,9 +76,6 @@ __all__ = [
     "compress",
     "decompress",
     "table3_errors",
-    "sample_sky_parameters",
-    "sky_coefficients",
-    "table3_experiment",
 ]
 
 BOUND_NAMES: tuple[str, ...] = ("prior", "tight")
@@ -168,17 +117,14 @@ CLAMP_TOLERANCE: float = 1e-9
 maximising direction reaches the bound exactly, and float64 rounding of its projection can
 exceed it by a few ulps; anything beyond this is reported with :class:`QuantizationClampWarning`."""
 
+_FLOAT_MAX: float = float(np.finfo(np.float64).max)
+"""Largest finite float64: decoded coefficients are clipped to +-this (see :func:`decompress`)."""
+
 TABLE3_THETA_NODES: int = 32
 """Gauss nodes in cos(theta) of the sphere rule (2 * 32^2 = 2048 directions) on which
 :func:`table3_errors` integrates |error|; the squared error is integrated exactly (it is a
-polynomial of degree 4). 32 against 64 nodes changes the L1 sums by about 1e-5 relative."""
-
-SKY_SOURCES: tuple[str, ...] = ("auto", "runtime", "reference")
-"""Sky data sources of :func:`sky_coefficients`: the runtime (skysh.SkySH) if importable, else the
-reference projection (skysh.preetham.sky_sh); or either one explicitly."""
-
-SKY_TURBIDITY_RANGE: tuple[float, float] = (2.5, 6.0)
-"""Turbidity domain of the fitted runtime (CONVENTIONS.md), sampled by :func:`sample_sky_parameters`."""
+polynomial of degree 4). |error| has kinks, so its rule is not exact: ``tools/quantize_experiment.py``
+prints the change at twice the nodes and ``tests/test_quantize.py`` bounds it."""
 
 
 class QuantizationClampWarning(UserWarning):
@@ -211,7 +157,7 @@ def _layout(bits: int) -> tuple[int, int]:
     return per_word, -(-(N_COEFFS - 1) // per_word)
 
 
-@lru_cache(maxsize=None)
+@cache
 def _used_bits(bits: int) -> NDArray[np.uint64]:
     """Per word, the mask of the bits that hold a field (the rest is zero padding)."""
     per_word, n_words = _layout(bits)
@@ -235,7 +181,7 @@ def words_per_channel(bits: int = DEFAULT_BITS) -> int:
     -------
     int
         ``ceil(8 / (32 // bits))``: 2 for 8 bits (the seed's layout), 3 for 10,
-        4 for 16. See the module docstring for the full table.
+        4 for 16. The full table is in docs/quantize.md.
 
     Examples
     --------
@@ -263,6 +209,7 @@ def bounds(bound: str = "tight", irradiance: bool = False) -> NDArray[np.float64
     ndarray
         Shape (8,), dimensionless, in the coefficient order k = 1..8.
     """
+    irradiance = check_flag(irradiance, "irradiance")
     check_choice(bound, "bound", BOUND_NAMES)
     b = PRIOR_BOUNDS if bound == "prior" else TIGHT_BOUNDS
     return b * IRRADIANCE_FACTORS if irradiance else b.copy()
@@ -287,17 +234,18 @@ def ratios(coeffs: ArrayLike, bound: str = "tight", irradiance: bool = False) ->
         the value is 0 if the coefficient is zero too, else +-inf (not finite:
         such SH come from no non-negative function; :func:`compress` clamps them).
     """
+    irradiance = check_flag(irradiance, "irradiance")
     c = _check_coeffs(coeffs)
     return _ratios(c, bounds(bound, bool(irradiance)))
 
 
 def _ratios(c: NDArray, scale: NDArray) -> NDArray:
-    denominator = c[..., :1, :] * scale[:, None]
+    dc = c[..., :1, :]
     rest = c[..., 1:, :]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        v = rest / denominator
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        v = (rest / dc) / scale[:, None]  # not rest / (dc * scale): dc * scale overflows for dc near 1e308
     # 0 / 0 (zero function): store exactly zero; x / 0 with x != 0 stays +-inf and is clamped.
-    return np.where(denominator == 0.0, np.where(rest == 0.0, 0.0, np.copysign(np.inf, rest)), v)
+    return np.where(dc == 0.0, np.where(rest == 0.0, 0.0, np.copysign(np.inf, rest)), v)
 
 
 # --------------------------------------------------------------------------- #
@@ -335,7 +283,7 @@ def compress(
         Shape (..., C), float64, the DC coefficients unchanged.
     words : ndarray
         Shape (..., C, W), uint32, ``W = words_per_channel(bits)`` (2 for 8
-        bits); layout in the module docstring (for 8 bits: word 0 holds
+        bits); layout in docs/quantize.md (for 8 bits: word 0 holds
         coefficients 1, 2, 3, 4 in bits 0-7, 8-15, 16-23, 24-31, word 1 holds
         5, 6, 7, 8).
 
@@ -361,6 +309,7 @@ def compress(
     >>> words.shape, bool(np.allclose(decompress(dc, words), c, atol=np.sqrt(3) / 254))
     ((1, 2), True)
     """
+    sqrt, irradiance = check_flag(sqrt, "sqrt"), check_flag(irradiance, "irradiance")
     c = _check_coeffs(coeffs)
     bits = _check_bits(bits)
     scale = bounds(bound, bool(irradiance))
@@ -427,7 +376,10 @@ def decompress(
     -------
     ndarray
         Shape (..., 9, C), float64, same unit as ``dc``. Code ``q`` decodes to
-        ``(q / bv - 1) * dc * bound_k`` (squared with its sign first when ``sqrt``).
+        ``(q / bv - 1) * dc * bound_k`` (squared with its sign first when ``sqrt``),
+        finite for every finite ``dc``: a value beyond the largest float (a DC near
+        1e308 with a coefficient near its bound) is clipped to it, which moves it
+        towards the compressed coefficient (itself finite).
 
     Raises
     ------
@@ -437,10 +389,11 @@ def decompress(
         bits above the last field are not zero (words packed with another
         ``bits``).
     """
+    sqrt, irradiance = check_flag(sqrt, "sqrt"), check_flag(irradiance, "irradiance")
     d = as_float_array(dc, "dc")
     bits = _check_bits(bits)
     scale = bounds(bound, bool(irradiance))
-    per_word, n_words = _layout(bits)
+    _per_word, n_words = _layout(bits)
     w = np.asarray(words)
     if w.dtype.kind not in "ui":
         raise ValueError(f"words must be integers in [0, 2^32 - 1], got dtype {w.dtype}")
@@ -464,7 +417,9 @@ def decompress(
         t = np.sign(t) * (t * t)
     out = np.empty(d.shape[:-1] + (N_COEFFS, d.shape[-1]))
     out[..., 0, :] = d
-    out[..., 1:, :] = np.moveaxis(t, -1, -2) * (d[..., None, :] * scale[:, None])
+    with np.errstate(over="ignore"):  # (t * bound) * dc, not t * (dc * bound): dc * bound overflows near 1e308
+        rest = np.moveaxis(t * scale, -1, -2) * d[..., None, :]
+    out[..., 1:, :] = np.clip(rest, -_FLOAT_MAX, _FLOAT_MAX)
     return out
 
 
@@ -519,28 +474,16 @@ def table3_errors(
 
     Notes
     -----
-    The error is the decoded minus the original band-limited function (the
-    compression error only, not the projection error), divided per probe and
-    channel by the original's mean over the sphere (``c_0 Y_00`` for radiance,
-    ``A_0 c_0 Y_00`` for irradiance): the codec is scale-invariant (it stores
-    ratios to DC), so this weighs every probe alike instead of letting the
-    brightest skies dominate. Like the seed's, L1 and L2 are sums (norms) over
-    all probes and channels, RMSE a mean:
-
-    -   L1 = sum_{p, c} (1 / 4 pi) integral |e| dw (quadrature);
-    -   L2 = sqrt(sum_{p, c} (1 / 4 pi) integral e^2 dw) (exact from the
-        coefficients by orthonormality);
-    -   RMSE = L2 / sqrt(P C).
-
-    L2 and RMSE therefore always change by the same percentage; the seed's
-    Table 3 shows 5.361 % against 1.493 % only because it prints RMSE with two
-    digits (0.067 -> 0.066 is 1.493 %).
-
-    Irradiance: the irradiance coefficients ``sh.irradiance(coeffs)`` are
-    compressed with ``irradiance=True`` and compared with the uncompressed ones.
+    ``e`` is the decoded minus the original band-limited function (the compression
+    error only), divided per probe and channel by the original's mean over the sphere
+    (``c_0 Y_00``; ``A_0 c_0 Y_00`` for irradiance; why: docs/quantize.md). As in the
+    seed, ``L1 = sum_{p,c} (1 / 4 pi) integral |e| dw`` (quadrature), ``L2 =
+    sqrt(sum_{p,c} (1 / 4 pi) integral e^2 dw)`` (exact by orthonormality) and ``RMSE =
+    L2 / sqrt(P C)``. The irradiance rows compress ``sh.irradiance(coeffs)`` with
+    ``irradiance=True``.
     """
-    c = _check_coeffs(coeffs)
-    c = c.reshape((-1, N_COEFFS, c.shape[-1]))
+    checked = _check_coeffs(coeffs)
+    c: NDArray[np.float64] = checked.reshape((-1, N_COEFFS, checked.shape[-1]))
     if c.shape[0] == 0:
         raise ValueError("coeffs must hold at least one probe")
     if not np.all(c[:, 0, :] > 0.0):
@@ -577,129 +520,3 @@ def table3_errors(
                 change = 100.0 * (prior - tight) / prior if prior > 0.0 else 0.0
                 changes.append({"quantity": quantity, "sqrt": use_sqrt, "metric": metric, "change_percent": change})
     return {"rows": rows, "changes": changes, "probes": int(c.shape[0]), "channels": int(c.shape[2]), "bits": bits}
-
-
-# --------------------------------------------------------------------------- #
-# Sky data
-# --------------------------------------------------------------------------- #
-def sample_sky_parameters(n: int, seed: int | None = 0) -> tuple[NDArray, NDArray, NDArray]:
-    """
-    Spread ``n`` (sun zenith, sun azimuth, turbidity) points over the fitted sky domain.
-
-    Parameters
-    ----------
-    n
-        Number of points, >= 1.
-    seed
-        Seed of the scrambled Halton sequence (same seed, same points).
-
-    Returns
-    -------
-    sun_zenith, sun_azimuth, turbidity
-        Shapes (n,) each: radians in [0, pi/2], radians in [0, 2 pi), and
-        turbidity in [2.5, 6] (the runtime's domain), uniform in each
-        parameter (low-discrepancy, so small ``n`` still covers the domain).
-    """
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise ValueError(f"n must be a positive integer, got {n!r}")
-    from scipy.stats import qmc  # scipy is a runtime dependency; imported here to keep import skysh light
-
-    u = qmc.Halton(d=3, scramble=True, rng=np.random.default_rng(seed)).random(int(n))
-    low, high = SKY_TURBIDITY_RANGE
-    return 0.5 * math.pi * u[:, 0], 2.0 * math.pi * u[:, 1], low + (high - low) * u[:, 2]
-
-
-def sky_coefficients(
-    sun_zenith: ArrayLike,
-    turbidity: ArrayLike,
-    sun_azimuth: ArrayLike = 0.0,
-    source: str = "auto",
-) -> tuple[NDArray[np.float64], str]:
-    """
-    9-coefficient RGB SH of the Preetham sky at many points, from the runtime or the reference.
-
-    Parameters
-    ----------
-    sun_zenith
-        Radians, [0, pi/2], shape (P,) (or scalar).
-    turbidity
-        [2.5, 6], broadcasting with ``sun_zenith``.
-    sun_azimuth
-        Radians, broadcasting with ``sun_zenith``.
-    source
-        ``"runtime"``: ``skysh.SkySH.load().coefficients(..., bands=3,
-        gibbs=False, dering=False)`` (vectorised over the points).
-        ``"reference"``: :func:`skysh.preetham.sky_sh` (bands=3) point by point
-        (a Python loop: the reference takes scalars; about 10 ms a point).
-        ``"auto"``: the runtime if it can be imported and loaded, else the
-        reference.
-
-    Returns
-    -------
-    coeffs, used
-        (P, 9, 3) linear-sRGB SH in cd/m^2, and the name of the source used
-        ("runtime" or "reference").
-
-    Notes
-    -----
-    The runtime is asked for ``gibbs=False`` so that both sources give the same
-    quantity (the unfiltered projection; the runtime's is its polynomial fit).
-    """
-    check_choice(source, "source", SKY_SOURCES)
-    ts = check_range(sun_zenith, "sun_zenith", 0.0, 0.5 * math.pi, unit="rad")
-    t = check_range(turbidity, "turbidity", *SKY_TURBIDITY_RANGE)
-    az = as_float_array(sun_azimuth, "sun_azimuth")
-    ts, t, az = (np.ravel(a) for a in np.broadcast_arrays(ts, t, az))
-    if source in ("auto", "runtime"):
-        try:
-            from skysh import SkySH
-
-            sky = SkySH.load()
-        except (ImportError, AttributeError, OSError) as error:
-            if source == "runtime":
-                raise ImportError(f"source='runtime' but skysh.SkySH is not usable: {error}") from error
-        else:
-            coeffs = sky.coefficients(ts, t, sun_azimuth=az, bands=3, gibbs=False, dering=False, irradiance=False)
-            return np.asarray(coeffs, dtype=np.float64).reshape(ts.shape + (N_COEFFS, 3)), "runtime"
-    from skysh import preetham
-
-    if ts.size == 0:
-        return np.zeros((0, N_COEFFS, 3)), "reference"
-    # The reference takes scalars: one projection per point (about 10 ms each).
-    coeffs = [preetham.sky_sh(float(a), float(b), bands=3, sun_azimuth=float(g)) for a, b, g in zip(ts, t, az)]
-    return np.stack(coeffs), "reference"
-
-
-def table3_experiment(
-    n_points: int = 1024,
-    seed: int | None = 0,
-    bits: int = DEFAULT_BITS,
-    source: str = "auto",
-    n_theta: int = TABLE3_THETA_NODES,
-) -> dict[str, Any]:
-    """
-    The seed's Table 3 on sky data: :func:`table3_errors` over many sky points.
-
-    Parameters
-    ----------
-    n_points
-        Number of (sun zenith, sun azimuth, turbidity) points
-        (:func:`sample_sky_parameters`), >= 1.
-    seed
-        Seed of the points.
-    bits, n_theta
-        As in :func:`table3_errors`.
-    source
-        As in :func:`sky_coefficients`.
-
-    Returns
-    -------
-    dict
-        The result of :func:`table3_errors` plus ``"source"`` (the sky data used),
-        ``"points"`` and ``"seed"``.
-    """
-    ts, az, t = sample_sky_parameters(n_points, seed)
-    coeffs, used = sky_coefficients(ts, t, az, source=source)
-    result = table3_errors(coeffs, bits=bits, n_theta=n_theta)
-    result.update({"source": used, "points": int(n_points), "seed": seed})
-    return result

@@ -6,7 +6,12 @@ The per-frame runtime (Habel 2008, sections 3.1-3.3)
     :meth:`SkySH.coefficients` evaluates the polynomials for the sun and
     turbidity, applies the zonal sinc Gibbs filter (eq. 5), rotates about Z by
     the sun's azimuth (eq. 4), optionally deringes (Sloan 2017) and convolves
-    with the clamped cosine (irradiance).
+    with the clamped cosine (irradiance). ``sun=True`` adds the sun's disk as
+    a windowed delta and ``ground_albedo`` a Lambertian ground lit by sky and
+    sun (:mod:`skysh.lights`: the order of the parts and the fused scalar
+    path); :meth:`SkySH.sun_light` gives the sun as a directional light
+    (direction and RGB illuminance, lux) from the file's sun table
+    (:class:`skysh.sunlight.SunLight`).
 
 Everything static is prepared in :meth:`SkySH.__init__`: for every band count
 N and Gibbs setting, one table whose zonal rows are pre-scaled by
@@ -20,7 +25,8 @@ that rotate (eq. 4) and fill the m < 0 coefficients, and the luminance scale
 (one tan, two exp). A batch is one design matrix, one matrix product over the
 full table and one multiplication by the rotation factors (built by angle
 addition). ``python benchmarks/bench_runtime.py`` prints what each costs
-against a bare numpy product.
+against a bare numpy product; ``python benchmarks/bench_lights.py`` what the
+sun and the ground add.
 
 ``import skysh.runtime`` imports numpy and the coefficient file reader only:
 not colour-science, matplotlib or the offline fit.
@@ -40,9 +46,19 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from skysh import coefficient_file, poly, sh
-from skysh._checks import check_bands, check_flag, check_range
+from skysh import coefficient_file, ground, lights, poly, sh
+from skysh._checks import (
+    check_bands,
+    check_dirs,
+    check_flag,
+    check_range,
+    check_scalar,
+    check_size,
+    number_text,
+    short_repr,
+)
 from skysh.preetham import _luminance_scale
+from skysh.sunlight import SunLight
 
 __all__ = ["SkySH", "gibbs_factors"]
 
@@ -105,7 +121,7 @@ def _real_scalar(value: Any) -> float | None:
     """
     kind = type(value)
     if kind is float:
-        return value  # type: ignore[no-any-return]
+        return value
     if kind in _REAL_SCALAR_TYPES or (kind is np.ndarray and value.ndim == 0 and value.dtype.kind in "iuf"):
         try:
             return float(value)
@@ -118,11 +134,12 @@ class _Plan:
     """Precomputed arithmetic of one (bands, gibbs) setting."""
 
     __slots__ = (
-        "bands", "degrees", "half_table", "table_flat", "rot_index", "lobe",
+        "bands", "degrees", "half_table", "table_flat", "rot_index", "batch_rot_index", "lobe",
         "split", "angle_map", "gather", "rotation",
     )
 
-    def __init__(self, sky_table: coefficient_file.SkyTable, bands: int, gibbs: bool) -> None:
+    def __init__(self, sky_table: coefficient_file.SkyTable, bands: int, gibbs: bool, c10: bool = False) -> None:
+        """``c10``: append the *unfiltered* (1, 0) row to the tables (for the ground's E_h; any ``bands``)."""
         self.bands = bands
         d = sky_table.degrees[:bands].max(axis=0)
         self.degrees = (int(d[0]), int(d[1]))
@@ -134,7 +151,10 @@ class _Plan:
             for i in range(self.degrees[0] + 1)
             for j in range(self.degrees[1] + 1)
         ]
-        half = sky_table.table[np.ix_(terms, np.arange(k_half))].copy()  # (T, K_half, 3), m >= 0 rows
+        half = sky_table.table[np.ix_(np.array(terms, dtype=np.intp), np.arange(k_half))].copy()  # (T, K_half, 3), m >= 0 rows
+        if c10:  # (1, 0) is row 1 of the file's layout (a 1-band file has none: zeros, the ground is refused)
+            extra = sky_table.table[terms, 1:2] if sky_table.bands > 1 else np.zeros((len(terms), 1, 3))
+            half = np.concatenate([half, extra], axis=1)  # (T, K_half + 1, 3)
         if gibbs:  # Habel eq. (5) folded into the zonal rows (the seed's own optimisation)
             factors = gibbs_factors(bands)
             for row, (l, m) in enumerate(coefficient_file.zonal_half_layout(bands)):
@@ -146,10 +166,12 @@ class _Plan:
         # rotation factors are laid out [cos(0 a) .. cos((N-1) a), sin(0 a) .. sin((N-1) a)].
         position = {lm_: row for row, lm_ in enumerate(coefficient_file.zonal_half_layout(bands))}
         source = np.array([position[(l, abs(m))] for l, m in lms], dtype=np.intp)
-        m = np.array([m for _, m in lms])
-        self.rot_index = np.where(m < 0, bands + np.abs(m), np.abs(m)).astype(np.intp)
-        # Batch path: the full table (m < 0 columns repeat their m > 0 partners).
-        self.table_flat = np.ascontiguousarray(half[:, source].reshape(len(terms), k * 3))
+        orders = np.array([m for _, m in lms])
+        self.rot_index = np.where(orders < 0, bands + np.abs(orders), np.abs(orders)).astype(np.intp)
+        # Batch path: the full table (m < 0 columns repeat their m > 0 partners; the c_10 row last, unrotated).
+        columns = list(source) + ([k_half] if c10 else [])
+        self.table_flat = np.ascontiguousarray(half[:, columns].reshape(len(terms), -1))
+        self.batch_rot_index = np.concatenate([self.rot_index, np.zeros(len(columns) - len(source), np.intp)])
         self.lobe = sh.cosine_lobe(bands)[np.array([l for l, _ in lms])][:, None]
         # Scalar path: packed = cos(angle_map @ (acos x, acos y, phi, 1)) holds T_0..T_dx(x),
         # T_0..T_dy(y), cos(m phi) and sin(m phi) = cos(m phi - pi/2), m = 0 .. N - 1.
@@ -164,7 +186,7 @@ class _Plan:
         self.gather = 3 * source[:, None] + np.arange(3)
         self.rotation = np.repeat((dx + dy + 2 + self.rot_index)[:, None], 3, axis=1)  # (N^2, 3): no broadcast
         for array in (
-            self.half_table, self.table_flat, self.rot_index, self.lobe,
+            self.half_table, self.table_flat, self.rot_index, self.batch_rot_index, self.lobe,
             self.angle_map, self.gather, self.rotation,
         ):
             array.flags.writeable = False
@@ -172,7 +194,7 @@ class _Plan:
 
 class SkySH:
     """
-    SH lighting of the Preetham sky, per frame, from the fitted tables.
+    SH lighting of the Preetham sky, with its sun and ground, per frame, from the fitted tables.
 
     Create with :meth:`load`. Methods are read-only and thread-safe.
 
@@ -181,6 +203,8 @@ class SkySH:
     >>> sky = SkySH.load()
     >>> c = sky.coefficients(0.5, 3.0, sun_azimuth=1.0, bands=3)
     >>> c.shape
+    (9, 3)
+    >>> sky.coefficients(0.5, 3.0, 1.0, sun=True, ground_albedo=0.2).shape
     (9, 3)
     """
 
@@ -195,9 +219,11 @@ class SkySH:
             (n, g): _Plan(sky_table, n, g) for n in range(1, self.bands + 1) for g in (False, True)
         }
         self._colour_matrices: dict[str, NDArray[np.float64]] = {}
+        self._sun: SunLight | None = SunLight(sky_table) if "sun" in sky_table.tables else None
+        self._lit_plans: dict[tuple[int, bool], lights.LitPlan] = {}  # built on first use of the sun or the ground
 
     @classmethod
-    def load(cls, path: str | Path | None = None) -> "SkySH":
+    def load(cls, path: str | Path | None = None) -> SkySH:
         """Load the shipped coefficient file (or ``path``), checked (see :func:`skysh.coefficient_file.read`)."""
         resolved = coefficient_file.default_path() if path is None else Path(path)
         return cls(coefficient_file.read(resolved), resolved)
@@ -207,76 +233,78 @@ class SkySH:
 
     # ------------------------------------------------------------------ #
     def coefficients(
-        self,
-        sun_zenith: ArrayLike,
-        turbidity: ArrayLike,
-        sun_azimuth: ArrayLike = 0.0,
-        bands: int = 3,
-        gibbs: bool | None = None,
-        dering: bool | None = None,
-        irradiance: bool = False,
-        colourspace: str | None = None,
+        self, sun_zenith: ArrayLike, turbidity: ArrayLike, sun_azimuth: ArrayLike = 0.0, bands: int = 3,
+        gibbs: bool | None = None, dering: bool | None = None, irradiance: bool = False, colourspace: str | None = None,
+        sun: bool = False, ground_albedo: ArrayLike = 0.0,
     ) -> NDArray[np.float64]:
         """
-        SH coefficients of the sky for one frame (or a batch).
+        SH coefficients of the sky (and its sun and ground) for one frame (or a batch).
 
         Parameters
         ----------
-        sun_zenith
-            Radians, [0, pi/2] (sun at the zenith to sun on the horizon).
-        turbidity
-            [2.5, 6], the fitted domain.
-        sun_azimuth
-            Radians, any finite value; from +X towards +Y.
+        sun_zenith, turbidity, sun_azimuth
+            Radians in [0, pi/2] (zenith to horizon); [2.5, 6]; radians, any finite
+            value, from +X towards +Y. The fitted domain.
         bands
-            Number of SH bands N in [1, file bands] (7 in the shipped file).
-            3 bands suffice for diffuse (irradiance) lighting.
+            SH bands N in [1, file bands] (7 shipped); 3 suffice for diffuse lighting.
         gibbs
-            Apply the zonal sinc filter of Habel eq. (5) with N = ``bands``.
-            Default (None): by intent, on for radiance, off for irradiance.
-            The filter halves the *radiance*'s ringing below the horizon but
-            blurs: 3-band irradiance with it is far from the true sky's
-            (the README's "Defaults" table, printed by
-            ``python tools/error_report.py --sections 9``).
+            The zonal sinc filter of Habel eq. (5), N = ``bands``, on the sky and
+            the ground (never the sun). Default (None): on for radiance (it halves
+            the ringing), off for irradiance (it blurs: ``python
+            tools/error_report.py --sections 9``).
         dering
-            Window the result so the reconstructed irradiance is non-negative
-            (Sloan 2017; :func:`skysh.dering.dering`), after the Gibbs filter
-            and the rotation; one window for all channels, so colour does not
-            shift. Default (None): by intent, on for irradiance, off for
-            radiance.
+            Window the sky so its irradiance is non-negative (Sloan 2017,
+            :func:`skysh.dering.dering`; one window for all channels), after the
+            filter and the rotation, before the sun and the ground are added (each
+            non-negative by construction). Default (None): on for irradiance only.
         irradiance
-            Return irradiance coefficients E (clamped-cosine convolution,
-            cd/m^2 x sr: lux for the luminance) instead of radiance. Engines
-            that want E / pi get it from :mod:`skysh.engines`.
+            Return irradiance E (clamped-cosine convolution, cd/m^2 x sr: lux for
+            the luminance); engines wanting E / pi: :mod:`skysh.engines`.
         colourspace
-            colour-science RGB colourspace name for the result; default the
-            file's (linear sRGB). Exact, as SH are linear in colour.
+            colour-science RGB colourspace name; default the file's (linear sRGB).
+        sun
+            Add the sun's disk (:meth:`sun_light`), a delta windowed by :func:`skysh.solar.sun_window`.
+        ground_albedo
+            A number or an RGB triple (output colourspace) in [0, 1]: a Lambertian
+            ground below the horizon, radiance albedo x E_h / pi with E_h the exact
+            irradiance of the horizontal ground by the sky (and the sun when
+            ``sun``). Default 0: black. Order and derivation: :mod:`skysh.lights`.
 
         Returns
         -------
         ndarray
-            (N * N, 3), or (..., N * N, 3) when the parameters are arrays
-            (broadcast together); radiance in cd/m^2 (R = G = B = Y for the
+            (N * N, 3), or (..., N * N, 3) for array parameters (broadcast; empty:
+            (0, N * N, 3); at most ``skysh._checks.MAX_ARRAY_ELEMENTS`` values in
+            its largest array); radiance in cd/m^2 (R = G = B = Y for the
             colourspace's white), linear RGB.
 
         Raises
         ------
         ValueError
-            For a parameter outside its range (named, with the range), NaN or
-            inf, or ``bands`` outside [1, file bands]. Nothing is extrapolated.
+            A parameter outside its range (named, with the range), not finite, not broadcasting,
+            too large, or an unknown colourspace; ``sun=True`` without the file's sun table.
+        TypeError
+            ``gibbs``, ``dering``, ``irradiance`` or ``sun`` not a bool (None: by intent).
         """
         irradiance = check_flag(irradiance, "irradiance")
         gibbs = not irradiance if gibbs is None else check_flag(gibbs, "gibbs")
         dering = irradiance if dering is None else check_flag(dering, "dering")
+        sun = sun if sun is False else check_flag(sun, "sun")
+        albedo = None if type(ground_albedo) is float and ground_albedo == 0.0 else lights.check_albedo(ground_albedo)
+        if colourspace is not None and not isinstance(colourspace, str):  # before any work, naming it
+            raise ValueError(f"colourspace must be None or a colour-science RGB colourspace name, got {short_repr(colourspace)}")
         ts, t, phi = _real_scalar(sun_zenith), _real_scalar(turbidity), _real_scalar(sun_azimuth)
-        if ts is not None and t is not None and phi is not None:
-            out = self._one(ts, t, phi, bands, gibbs)
+        scalar = ts is not None and t is not None and phi is not None
+        if sun or albedo is not None:
+            frame = (ts, t, phi) if scalar else (sun_zenith, turbidity, sun_azimuth)
+            out = self._lit(frame, scalar, bands, gibbs, dering, colourspace, sun, albedo)
+            return out * self._plans[(math.isqrt(out.shape[-2]), True)].lobe if irradiance else out
+        if scalar:
+            out = self._one(ts, t, phi, bands, gibbs)  # type: ignore[arg-type]
         else:
             out = self._batch(sun_zenith, turbidity, sun_azimuth, bands, gibbs)
         if dering:
-            from skysh.dering import dering as _dering  # imported on first use
-
-            out = _dering(out)[0]
+            out = _dering(out)
         if irradiance:
             out = out * self._plans[(int(bands), True)].lobe
         if colourspace is not None and colourspace != self.colourspace:
@@ -285,13 +313,7 @@ class SkySH:
 
     def _one(self, ts: float, t: float, phi: float, bands: Any, gibbs: bool) -> NDArray[np.float64]:
         """Scalar fast path: floats only, arithmetic on precomputed tables."""
-        if not _ZMIN <= ts <= _ZMAX:  # also False for NaN
-            raise ValueError(f"sun_zenith must lie in [{_ZMIN:g}, {_ZMAX:g}] rad (the fitted domain), got {ts!r}")
-        if not _TMIN <= t <= _TMAX:
-            raise ValueError(f"turbidity must lie in [{_TMIN:g}, {_TMAX:g}] (the fitted domain), got {t!r}")
-        if not math.isfinite(phi):
-            raise ValueError(f"sun_azimuth must be finite (radians), got {phi!r}")
-        phi = math.fmod(phi, _TWO_PI)  # so m * phi cannot overflow
+        phi = _check_frame(ts, t, phi)
         plan = self._plans.get((bands, gibbs)) if type(bands) is int and type(gibbs) is bool else None
         if plan is None:
             check_bands(bands, high=self.bands)
@@ -314,33 +336,159 @@ class SkySH:
 
     def _batch(self, sun_zenith: ArrayLike, turbidity: ArrayLike, sun_azimuth: ArrayLike, bands: Any, gibbs: bool) -> NDArray:
         """Array path: one design matrix, one matrix product, vectorised rotation."""
+        ts, t, phi, shape = self._frames(sun_zenith, turbidity, sun_azimuth)
+        bands = check_bands(bands, high=self.bands)
+        plan = self._plans[(bands, bool(gibbs))]
+        return self._batch_sky(ts, t, phi, shape, plan)
+
+    def _frames(self, sun_zenith: ArrayLike, turbidity: ArrayLike, sun_azimuth: ArrayLike) -> tuple:
+        """Checked parameter arrays of a batch and their broadcast shape (not yet broadcast)."""
         ts = check_range(sun_zenith, "sun_zenith", _ZMIN, _ZMAX, unit="rad (the fitted domain)")
         t = check_range(turbidity, "turbidity", _TMIN, _TMAX, unit="(the fitted domain)")
         phi = check_range(sun_azimuth, "sun_azimuth", -np.inf, np.inf, unit="rad")
-        bands = check_bands(bands, high=self.bands)
-        plan = self._plans[(bands, bool(gibbs))]
-        shape = np.broadcast_shapes(ts.shape, t.shape, phi.shape)
+        try:
+            shape = np.broadcast_shapes(ts.shape, t.shape, phi.shape)
+        except ValueError:
+            raise ValueError(
+                f"sun_zenith, turbidity and sun_azimuth must broadcast together, got shapes {ts.shape}, {t.shape} "
+                f"and {phi.shape}"
+            ) from None
+        return ts, t, phi, shape
+
+    def _batch_sky(self, ts: NDArray, t: NDArray, phi: NDArray, shape: tuple[int, ...], plan: _Plan) -> NDArray:
+        """(shape..., rows, 3) of checked arrays: rows N * N, plus the unfiltered c_10 for a ``c10`` plan."""
+        bands = plan.bands
+        rows = plan.batch_rot_index.shape[0]
+        size = math.prod(shape)
+        largest = max((ts.size, "sun_zenith"), (t.size, "turbidity"), (phi.size, "sun_azimuth"))[1]
+        check_size(size * max(len(plan.table_flat), rows * 3), largest, f"{size:,} frames")
         if 0 in shape:
-            return np.zeros(shape + (bands * bands, 3))
+            return np.zeros(shape + (rows, 3))
         ts, t, phi = (np.broadcast_to(a, shape).ravel() for a in (ts, t, phi))
-        x, y = poly.scale(ts, t)
-        tx = poly.chebyshev(x, plan.degrees[0])
-        ty = poly.chebyshev(y, plan.degrees[1]) * _luminance_scale(ts, t, np)[:, None]
+        x, y = poly._scale(ts, t)
+        tx = poly._chebyshev(x, plan.degrees[0])
+        ty = poly._chebyshev(y, plan.degrees[1]) * _luminance_scale(ts, t, np)[:, None]
         p = (tx[:, :, None] * ty[:, None, :]).reshape(ts.shape[0], -1)  # (n, T) design
-        out = (p @ plan.table_flat).reshape(-1, bands * bands, 3)  # the one matrix product
-        out *= np.take(_rotation_factors(phi, bands), plan.rot_index, axis=1)[:, :, None]
-        return out.reshape(shape + (bands * bands, 3))
+        out = (p @ plan.table_flat).reshape(-1, rows, 3)  # the one matrix product
+        out *= np.take(_rotation_factors(phi, bands), plan.batch_rot_index, axis=1)[:, :, None]
+        return out.reshape(shape + (rows, 3))
 
     def _colour_matrix(self, colourspace: str) -> NDArray[np.float64]:
         matrix = self._colour_matrices.get(colourspace)
         if matrix is None:
-            from skysh.preetham import rgb_from_xyz_matrix  # colour-science loads here, on first use
+            from skysh.preetham import (
+                rgb_from_xyz_matrix,  # colour-science loads here, on first use
+            )
 
             source = rgb_from_xyz_matrix(self.colourspace)
             matrix = rgb_from_xyz_matrix(colourspace) @ np.linalg.inv(source)
             matrix.flags.writeable = False
             self._colour_matrices[colourspace] = matrix
         return matrix
+
+    # ------------------------------------------------------------------ #
+    # The sun and the ground (skysh.lights)
+    # ------------------------------------------------------------------ #
+    def _lit_plan(self, bands: Any, gibbs: bool) -> lights.LitPlan:
+        plan = self._lit_plans.get((bands, gibbs)) if type(bands) is int else None
+        if plan is None:
+            bands = check_bands(bands, high=self.bands)
+            plan = self._lit_plans.get((bands, gibbs))
+            if plan is None:  # once per (bands, gibbs); a concurrent first call at worst builds it twice
+                sun = self.table.tables.get("sun")
+                matrix = None if self._sun is None else self._sun.rgb_from_xyz
+                plan = lights.LitPlan(_Plan(self.table, bands, gibbs, c10=True), sun, matrix, gibbs)
+                self._lit_plans[(bands, gibbs)] = plan
+        return plan
+
+    def _lit(self, frame: tuple, scalar: bool, bands: Any, gibbs: bool, dering: bool, colourspace: str | None,
+             sun: bool, albedo: tuple[float, float, float] | None) -> NDArray:
+        """Radiance SH of sky + sun + ground, in the output colourspace (the order of :mod:`skysh.lights`).
+
+        ``frame``: (sun_zenith, turbidity, sun_azimuth), Python floats when ``scalar``.
+        """
+        if sun and self._sun is None:
+            raise ValueError("sun=True needs the coefficient file's sun table (format 3); this SkyTable has none")
+        if albedo is not None and self.bands < 2:
+            raise ValueError("ground_albedo needs the sky's band-1 coefficient c_10: this SkyTable has 1 band")
+        convert = colourspace is not None and colourspace != self.colourspace
+        if scalar:
+            ts, t, phi = frame
+            phi = _check_frame(ts, t, phi)
+            plan = self._lit_plans.get((bands, gibbs)) if type(bands) is int else None
+            plan = self._lit_plan(bands, gibbs) if plan is None else plan
+            x, y = ts * _X_SCALE - _X_SHIFT, math.log(t) * _Y_SCALE - _Y_SHIFT
+            if not dering and not convert:  # the hot path: everything before one gather and rotation
+                return plan.fused(ts, t, phi, x, y, sun, albedo)
+            sky, sun_sh, e_h = plan.parts(ts, t, phi, x, y, sun)
+        else:
+            ts_a, t_a, phi_a, shape = self._frames(*frame)
+            plan = self._lit_plan(bands, gibbs)
+            sky, sun_sh, e_h = self._lit_batch(ts_a, t_a, phi_a, shape, plan, sun)
+        if dering:
+            sky = _dering(sky)
+        if sun_sh is not None:
+            sky = sky + sun_sh
+        if convert:
+            matrix = self._colour_matrix(colourspace).T  # type: ignore[arg-type]
+            sky, e_h = sky @ matrix, e_h @ matrix
+        if albedo is not None:
+            sky = plan.add_ground(sky, e_h, albedo)
+        return sky
+
+    def _lit_batch(self, ts: NDArray, t: NDArray, phi: NDArray, shape: tuple[int, ...], plan: lights.LitPlan,
+                   sun: bool) -> tuple[NDArray, NDArray | None, NDArray]:
+        """Batch: the sky (..., N * N, 3), the sun's windowed SH (or None) and E_h (..., 3), file colourspace."""
+        k = plan.bands * plan.bands
+        extended = self._batch_sky(ts, t, phi, shape, plan.sky)
+        sky, e_h = extended[..., :k, :], ground.HORIZONTAL_FACTOR * extended[..., k, :]
+        if not sun:
+            return sky, None, e_h
+        ts, t, phi = (np.broadcast_to(a, shape).ravel() for a in (ts, t, phi))
+        rgb = self._sun.rgb(ts, t)  # type: ignore[union-attr]
+        e_h = e_h + (np.cos(ts)[:, None] * rgb).reshape(shape + (3,))
+        return sky, plan.sun_batch(ts, phi, rgb).reshape(shape + (k, 3)), e_h
+
+    def sun_light(
+        self, sun_zenith: ArrayLike, turbidity: ArrayLike, sun_azimuth: ArrayLike = 0.0, colourspace: str | None = None
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """
+        The sun as a directional light: the unit vector towards it and its RGB illuminance.
+
+        Parameters
+        ----------
+        sun_zenith, turbidity, sun_azimuth
+            As :meth:`coefficients` (radians in [0, pi/2]; [2.5, 6]; radians, any finite value).
+        colourspace
+            colour-science RGB colourspace name; default the file's (linear sRGB).
+
+        Returns
+        -------
+        direction, rgb
+            ``(sin ts cos phi, sin ts sin phi, cos ts)`` (Z up) and the sun's direct
+            normal illuminance (Preetham 1999 appendix, fitted: :class:`skysh.sunlight.SunLight`),
+            lux per channel: an engine's directional light of that colour and
+            intensity. Each (3,) for real scalars, else (..., 3) over the broadcast
+            shape. Near the horizon a channel outside the gamut is slightly
+            negative, as the spectral model's RGB.
+
+        Raises
+        ------
+        ValueError
+            As :meth:`coefficients`; a coefficient table without a sun table.
+        """
+        if self._sun is None:
+            raise ValueError("sun_light needs the coefficient file's sun table (format 3); this SkyTable has none")
+        if colourspace is not None and not isinstance(colourspace, str):
+            raise ValueError(f"colourspace must be None or a colour-science RGB colourspace name, got {short_repr(colourspace)}")
+        ts, t, phi = _real_scalar(sun_zenith), _real_scalar(turbidity), _real_scalar(sun_azimuth)
+        if ts is not None and t is not None and phi is not None:
+            direction, rgb = self._sun.light(ts, t, phi)  # Python floats: its fast path, the same refusals
+        else:
+            direction, rgb = self._sun.light(sun_zenith, turbidity, sun_azimuth)
+        if colourspace is not None and colourspace != self.colourspace:
+            rgb = rgb @ self._colour_matrix(colourspace).T
+        return direction, rgb
 
     # ------------------------------------------------------------------ #
     def radiance(
@@ -352,10 +500,19 @@ class SkySH:
         bands: int = 3,
         gibbs: bool | None = None,
         colourspace: str | None = None,
+        sun: bool = False,
+        ground_albedo: ArrayLike = 0.0,
     ) -> NDArray[np.float64]:
-        """Reconstructed sky radiance (cd/m^2, linear RGB) in the directions ``dirs`` (..., 3) -> (..., 3)."""
-        c = self.coefficients(sun_zenith, turbidity, sun_azimuth, bands, gibbs, colourspace=colourspace)
-        return sh.evaluate(c, dirs)
+        """Reconstructed radiance (cd/m^2, linear RGB) in the directions ``dirs`` (..., 3) -> (..., 3).
+
+        The sun's parameters are single numbers here (as :meth:`coefficients`, whose
+        ``sun`` and ``ground_albedo`` these are); ``dirs`` is any batch of unit vectors,
+        empty included (an empty result).
+        """
+        d = self._frame_and_dirs(dirs, "dirs", bands, sun_zenith=sun_zenith, turbidity=turbidity, sun_azimuth=sun_azimuth)
+        c = self.coefficients(sun_zenith, turbidity, sun_azimuth, bands, gibbs, colourspace=colourspace, sun=sun,
+                              ground_albedo=ground_albedo)
+        return sh._basis(d, int(bands)) @ c
 
     def irradiance_at(
         self,
@@ -367,9 +524,46 @@ class SkySH:
         gibbs: bool | None = None,
         dering: bool | None = None,
         colourspace: str | None = None,
+        sun: bool = False,
+        ground_albedo: ArrayLike = 0.0,
     ) -> NDArray[np.float64]:
-        """Reconstructed irradiance (cd/m^2 x sr = lux for luminance) on surfaces with ``normals`` (..., 3) -> (..., 3)."""
-        c = self.coefficients(
-            sun_zenith, turbidity, sun_azimuth, bands, gibbs, dering=dering, irradiance=True, colourspace=colourspace
+        """Reconstructed irradiance (cd/m^2 x sr = lux for luminance) on surfaces with ``normals`` (..., 3) -> (..., 3).
+
+        The sun's parameters are single numbers here (as :meth:`coefficients`, whose
+        ``sun`` and ``ground_albedo`` these are); ``normals`` is any batch of unit
+        vectors, empty included (an empty result).
+        """
+        d = self._frame_and_dirs(
+            normals, "normals", bands, sun_zenith=sun_zenith, turbidity=turbidity, sun_azimuth=sun_azimuth
         )
-        return sh.evaluate(c, normals)
+        c = self.coefficients(sun_zenith, turbidity, sun_azimuth, bands, gibbs, dering=dering, irradiance=True,
+                              colourspace=colourspace, sun=sun, ground_albedo=ground_albedo)
+        return sh._basis(d, int(bands)) @ c
+
+    def _frame_and_dirs(self, dirs: ArrayLike, name: str, bands: Any, **sun: Any) -> NDArray[np.float64]:
+        """Checked directions of :meth:`radiance` / :meth:`irradiance_at`; the sun's parameters must be scalars."""
+        for key, value in sun.items():
+            if _real_scalar(value) is None:
+                check_scalar(value, key)  # names the parameter: not a number, not finite, or an array
+        bands = check_bands(bands, high=self.bands)
+        return check_dirs(dirs, name, per_point=bands * bands)
+
+
+def _dering(coeffs: NDArray[np.float64]) -> NDArray[np.float64]:
+    """:func:`skysh.dering.dering`'s coefficients (imported on first use)."""
+    from skysh.dering import dering
+
+    return dering(coeffs)[0]
+
+
+def _check_frame(ts: float, t: float, phi: float) -> float:
+    """Refuse a scalar frame outside the fitted domain (NaN included), naming the parameter; phi mod 2 pi."""
+    if not _ZMIN <= ts <= _ZMAX:  # also False for NaN
+        raise ValueError(
+            f"sun_zenith must lie in [{_ZMIN:g}, {_ZMAX:g}] rad (the fitted domain), got {number_text(ts)}"
+        )
+    if not _TMIN <= t <= _TMAX:
+        raise ValueError(f"turbidity must lie in [{_TMIN:g}, {_TMAX:g}] (the fitted domain), got {number_text(t)}")
+    if not math.isfinite(phi):
+        raise ValueError(f"sun_azimuth must be finite (radians), got {phi!r}")
+    return math.fmod(phi, _TWO_PI)  # so m * phi cannot overflow

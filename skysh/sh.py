@@ -36,17 +36,30 @@ References
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from functools import lru_cache
-from typing import Callable
+from functools import cache, lru_cache
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from skysh._checks import as_float_array, check_bands, check_choice, check_dirs
+from skysh._checks import (
+    MAX_ARRAY_ELEMENTS,
+    as_float_array,
+    check_bands,
+    check_choice,
+    check_count,
+    check_dirs,
+    check_flag,
+    check_scalar,
+    check_seed,
+    check_size,
+    short_repr,
+)
 
 __all__ = [
     "MAX_BANDS",
+    "MAX_GAUSS_NODES",
     "PROJECTION_METHODS",
     "n_coeffs",
     "index",
@@ -70,6 +83,12 @@ __all__ = [
 MAX_BANDS: int = 64
 """Largest band count accepted (l <= 63); the recurrence is stable far beyond it."""
 
+MAX_GAUSS_NODES: int = 1024
+"""Largest Gauss-Legendre node count of :func:`gauss_legendre` and :func:`quadrature_rule`:
+numpy's eigenvalue method costs O(n^2) memory and O(n^3) time, and skysh's densest rule (the
+error report's truth, ``sky_quadrature_rule`` with 2 x ``truth_nodes`` azimuth nodes) stays well
+below it."""
+
 PROJECTION_METHODS: tuple[str, ...] = ("quadrature", "mc", "stratified", "qmc")
 """Names accepted by :func:`project`'s ``method``."""
 
@@ -85,22 +104,21 @@ def n_coeffs(bands: int) -> int:
     return check_bands(bands, high=MAX_BANDS) ** 2
 
 
-def index(l: int, m: int) -> int:  # noqa: E741 (l is the standard name)
-    """Flat index ``l (l + 1) + m`` of the coefficient (l, m), ``|m| <= l``."""
-    if l < 0 or abs(m) > l:
-        raise ValueError(f"(l, m) must satisfy l >= 0 and |m| <= l, got ({l}, {m})")
+def index(l: int, m: int) -> int:
+    """Flat index ``l (l + 1) + m`` of the coefficient (l, m): integers, ``0 <= l < MAX_BANDS``, ``|m| <= l``."""
+    l = check_count(l, "l", 0, MAX_BANDS - 1)
+    m = check_count(m, "m", -l, l)
     return l * (l + 1) + m
 
 
 def lm(i: int) -> tuple[int, int]:
-    """Inverse of :func:`index`: the (l, m) of flat index ``i >= 0``."""
-    if i < 0:
-        raise ValueError(f"i must be >= 0, got {i}")
-    l = math.isqrt(i)  # noqa: E741
+    """Inverse of :func:`index`: the (l, m) of the flat index ``i``, an integer in [0, MAX_BANDS**2 - 1]."""
+    i = check_count(i, "i", 0, MAX_BANDS * MAX_BANDS - 1)
+    l = math.isqrt(i)
     return l, i - l * (l + 1)
 
 
-@lru_cache(maxsize=None)
+@cache
 def _l_of_index(bands: int) -> NDArray[np.int64]:
     """Band l of every flat index, shape (bands**2,)."""
     return np.repeat(np.arange(bands), 2 * np.arange(bands) + 1)
@@ -129,7 +147,7 @@ class _Recurrence:
     b: NDArray[np.float64]  # (bands, bands)
 
 
-@lru_cache(maxsize=None)
+@cache
 def _recurrence(bands: int) -> _Recurrence:
     diag = np.empty(bands)
     diag[0] = 0.5 / math.sqrt(math.pi)
@@ -139,7 +157,7 @@ def _recurrence(bands: int) -> _Recurrence:
         diag[m] = -diag[m - 1] * math.sqrt((2 * m + 1) / (2 * m)) * (math.sqrt(2.0) if m == 1 else 1.0)
     a = np.zeros((bands, bands))
     b = np.zeros((bands, bands))
-    for l in range(2, bands):  # noqa: E741
+    for l in range(2, bands):
         for m in range(0, l - 1):
             a[l, m] = math.sqrt((4 * l * l - 1) / (l * l - m * m))
             b[l, m] = math.sqrt(((l - 1) ** 2 - m * m) * (2 * l + 1) / ((2 * l - 3) * (l * l - m * m)))
@@ -183,7 +201,7 @@ def _basis_block(x: NDArray, y: NDArray, z: NDArray, bands: int, out: NDArray, w
         sm[m] += tmp
     # Rolling rows: q2 = Q[l-2, :], q1 = Q[l-1, :], q = Q[l, :], each indexed [m, point].
     q2, q1, q = qa, qb, qc
-    for l in range(bands):  # noqa: E741
+    for l in range(bands):
         if l >= 2:
             k = l - 1
             np.multiply(q1[:k], z, out=q[:k])
@@ -209,6 +227,8 @@ def basis(dirs: ArrayLike, bands: int) -> NDArray[np.float64]:
     ----------
     dirs
         Unit vectors, shape (..., 3), in the Z-up frame of docs/conventions.md.
+        An empty batch (0, 3) gives an empty result (0, N * N). At most
+        ``MAX_ARRAY_ELEMENTS / (N * N)`` directions (``skysh._checks``).
     bands
         Number of bands N in [1, 64] (l = 0 .. N - 1).
 
@@ -232,7 +252,11 @@ def basis(dirs: ArrayLike, bands: int) -> NDArray[np.float64]:
     True
     """
     bands = check_bands(bands, high=MAX_BANDS)
-    d = check_dirs(dirs)
+    return _basis(check_dirs(dirs, per_point=bands * bands), bands)
+
+
+def _basis(d: NDArray[np.float64], bands: int) -> NDArray[np.float64]:
+    """:func:`basis` of checked directions."""
     flat = d.reshape(-1, 3)
     x, y, z = np.ascontiguousarray(flat.T)  # contiguous coordinate rows: the recurrence runs on them
     out = _basis_kn(x, y, z, bands)
@@ -243,8 +267,10 @@ def _coeff_bands(coeffs: NDArray, name: str = "coeffs", axis: int = 0) -> int:
     """Band count of a coefficient array whose ``axis`` has length N**2."""
     k = coeffs.shape[axis] if coeffs.ndim else 0
     bands = math.isqrt(k)
-    if k == 0 or bands * bands != k:
-        raise ValueError(f"{name} must have a coefficient axis of length N**2 (1, 4, 9, ...), got shape {coeffs.shape}")
+    if k == 0 or bands * bands != k or bands > MAX_BANDS:
+        raise ValueError(
+            f"{name} must have a coefficient axis of length N**2 (1, 4, 9, ..., {MAX_BANDS}**2), got shape {coeffs.shape}"
+        )
     return bands
 
 
@@ -255,9 +281,9 @@ def evaluate(coeffs: ArrayLike, dirs: ArrayLike) -> NDArray[np.float64]:
     Parameters
     ----------
     coeffs
-        Shape (N * N,) or (N * N, C).
+        Shape (N * N,) or (N * N, C); N <= 64, C >= 1.
     dirs
-        Unit vectors, shape (..., 3).
+        Unit vectors, shape (..., 3); an empty batch gives an empty result.
 
     Returns
     -------
@@ -266,25 +292,32 @@ def evaluate(coeffs: ArrayLike, dirs: ArrayLike) -> NDArray[np.float64]:
         coefficients.
     """
     c = as_float_array(coeffs, "coeffs")
-    if c.ndim not in (1, 2):
-        raise ValueError(f"coeffs must have shape (N*N,) or (N*N, C), got {c.shape}")
+    if c.ndim not in (1, 2) or (c.ndim == 2 and c.shape[1] == 0):
+        raise ValueError(f"coeffs must have shape (N*N,) or (N*N, C) with C >= 1, got {c.shape}")
     bands = _coeff_bands(c)
-    return basis(dirs, bands) @ c
+    d = check_dirs(dirs, per_point=max(bands * bands, c.size // c.shape[0]))
+    return _basis(d, bands) @ c
 
 
 # --------------------------------------------------------------------------- #
 # Projection
 # --------------------------------------------------------------------------- #
-@lru_cache(maxsize=256)
 def gauss_legendre(n: int) -> tuple[NDArray, NDArray]:
-    """Gauss-Legendre nodes and weights on [-1, 1] (cached, read-only): exact for degree <= 2n - 1."""
-    nodes, weights = np.polynomial.legendre.leggauss(int(n))
+    """Gauss-Legendre nodes and weights on [-1, 1] (cached, read-only): exact for degree <= 2n - 1.
+
+    ``n`` is an integer in [1, :data:`MAX_GAUSS_NODES`].
+    """
+    return _gauss_legendre(check_count(n, "n", 1, MAX_GAUSS_NODES))
+
+
+@lru_cache(maxsize=256)
+def _gauss_legendre(n: int) -> tuple[NDArray, NDArray]:
+    nodes, weights = np.polynomial.legendre.leggauss(n)
     nodes.flags.writeable = False
     weights.flags.writeable = False
     return nodes, weights
 
 
-@lru_cache(maxsize=64)
 def quadrature_rule(n_theta: int, hemisphere: bool = False) -> tuple[NDArray, NDArray]:
     """
     Product Gauss-Legendre (in cos theta) x uniform azimuth rule on the sphere.
@@ -293,9 +326,10 @@ def quadrature_rule(n_theta: int, hemisphere: bool = False) -> tuple[NDArray, ND
     ----------
     n_theta
         Gauss-Legendre nodes in z = cos(theta) (over [-1, 1], or [0, 1] when
-        ``hemisphere``). The azimuth gets ``2 * n_theta`` uniform nodes.
+        ``hemisphere``), an integer in [1, :data:`MAX_GAUSS_NODES`]. The
+        azimuth gets ``2 * n_theta`` uniform nodes.
     hemisphere
-        Integrate only the upper hemisphere z >= 0.
+        Integrate only the upper hemisphere z >= 0 (a bool).
 
     Returns
     -------
@@ -306,9 +340,12 @@ def quadrature_rule(n_theta: int, hemisphere: bool = False) -> tuple[NDArray, ND
         ``< 2 n_theta`` in phi, hence for products of two SH of bands
         ``<= n_theta``. Read-only arrays, cached.
     """
-    if n_theta < 1:
-        raise ValueError(f"n_theta must be >= 1, got {n_theta}")
-    z, wz = gauss_legendre(n_theta)
+    return _quadrature_rule(check_count(n_theta, "n_theta", 1, MAX_GAUSS_NODES), check_flag(hemisphere, "hemisphere"))
+
+
+@lru_cache(maxsize=64)
+def _quadrature_rule(n_theta: int, hemisphere: bool) -> tuple[NDArray, NDArray]:
+    z, wz = _gauss_legendre(n_theta)
     if hemisphere:
         z, wz = 0.5 * (z + 1.0), 0.5 * wz
     n_phi = 2 * n_theta
@@ -326,7 +363,7 @@ def quadrature_rule(n_theta: int, hemisphere: bool = False) -> tuple[NDArray, ND
 @lru_cache(maxsize=16)
 def _quadrature_basis(n_theta: int, hemisphere: bool, bands: int) -> tuple[NDArray, NDArray]:
     """Nodes and the weighted basis (bands**2, M) of a cached quadrature rule."""
-    dirs, weights = quadrature_rule(n_theta, hemisphere)
+    dirs, weights = _quadrature_rule(n_theta, hemisphere)
     wy = _basis_kn(dirs[:, 0], dirs[:, 1], dirs[:, 2], bands) * weights
     wy.flags.writeable = False
     return dirs, wy
@@ -380,32 +417,50 @@ def project(
         stratified sqrt(n) x sqrt(n) grid in the area-preserving square (seed
         001). ``"qmc"``: scrambled Sobol points (scipy.stats.qmc).
     n
-        Sample count. Quadrature: about ``n`` nodes, as ``n_theta =
-        max(bands, round(sqrt(n / 2)))`` (default ``n_theta = 2 * bands + 8``).
-        Stratified: rounded down to a square. QMC: rounded up to a power of two.
-        Default for the random methods: 65536.
+        Sample count, an integer >= 1. Quadrature: about ``n`` nodes, as
+        ``n_theta = max(bands, round(sqrt(n / 2)))`` (default ``n_theta = 2 *
+        bands + 8``), at most :data:`MAX_GAUSS_NODES`. Stratified: rounded down
+        to a square. QMC: rounded up to a power of two. Default for the random
+        methods: 65536. The basis at the samples, ``n * N * N`` values, must
+        fit :data:`skysh._checks.MAX_ARRAY_ELEMENTS`.
     seed
-        Seed of the random methods (ignored by quadrature); same seed, same result.
+        Seed of the random methods, None or an integer >= 0 (ignored by
+        quadrature); same seed, same result.
     hemisphere
-        Integrate the upper hemisphere z >= 0 only: exact for functions that
-        vanish below the horizon, and twice the sample density there.
+        Integrate the upper hemisphere z >= 0 only (a bool): exact for
+        functions that vanish below the horizon, and twice the sample density
+        there.
 
     Returns
     -------
     ndarray
         (N * N, C), or (N * N,) when ``f`` returns (M,).
+
+    Raises
+    ------
+    ValueError
+        For a bad parameter (named), or when ``f`` returns another shape or a
+        value that is not a finite real number.
     """
+    if not callable(f):
+        raise ValueError(f"f must be a callable taking unit vectors (M, 3), got {short_repr(f)}")
     bands = check_bands(bands, high=MAX_BANDS)
     check_choice(method, "method", PROJECTION_METHODS)
-    if n is not None and (isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1):
-        raise ValueError(f"n must be a positive integer, got {n!r}")
+    seed = check_seed(seed)
+    hemisphere = check_flag(hemisphere, "hemisphere")
+    if n is not None:
+        n = check_count(n, "n", 1, 2 * MAX_GAUSS_NODES**2 if method == "quadrature" else MAX_ARRAY_ELEMENTS)
     if method == "quadrature":
         n_theta = 2 * bands + 8 if n is None else max(bands, round(math.sqrt(n / 2)))
-        dirs, wy = _quadrature_basis(n_theta, bool(hemisphere), bands)
+        check_size(2 * n_theta * n_theta * bands * bands, "n" if n is not None else "bands", "the basis at the nodes")
+        dirs, wy = _quadrature_basis(n_theta, hemisphere, bands)
         values = _call(f, dirs)
         return wy @ values
-    square = _sample_square(method, DEFAULT_SAMPLES if n is None else int(n), seed)
-    dirs = _uniform_dirs(square[:, 0], square[:, 1], bool(hemisphere))
+    count = DEFAULT_SAMPLES if n is None else n
+    points = 1 << max(0, math.ceil(math.log2(count))) if method == "qmc" else count
+    check_size(points * bands * bands, "n", "the basis at the samples")
+    square = _sample_square(method, count, seed)
+    dirs = _uniform_dirs(square[:, 0], square[:, 1], hemisphere)
     values = _call(f, dirs)
     area = 2.0 * np.pi if hemisphere else 4.0 * np.pi
     y = _basis_kn(dirs[:, 0], dirs[:, 1], dirs[:, 2], bands)
@@ -413,7 +468,7 @@ def project(
 
 
 def _call(f: Callable[[NDArray], ArrayLike], dirs: NDArray) -> NDArray:
-    values = np.asarray(f(dirs), dtype=np.float64)
+    values = as_float_array(f(dirs), "the values returned by f")
     if values.shape[:1] != dirs.shape[:1] or values.ndim > 2:
         raise ValueError(f"f must return shape (M,) or (M, C) for dirs (M, 3), got {values.shape}")
     return values
@@ -422,11 +477,11 @@ def _call(f: Callable[[NDArray], ArrayLike], dirs: NDArray) -> NDArray:
 # --------------------------------------------------------------------------- #
 # Rotation
 # --------------------------------------------------------------------------- #
-@lru_cache(maxsize=None)
+@cache
 def _z_pairs(bands: int) -> tuple[NDArray, NDArray, NDArray]:
     """For every (l, m > 0): flat indices of (l, m), (l, -m), and m."""
     pos, neg, ms = [], [], []
-    for l in range(1, bands):  # noqa: E741
+    for l in range(1, bands):
         for m in range(1, l + 1):
             pos.append(index(l, m))
             neg.append(index(l, -m))
@@ -443,8 +498,9 @@ def rotate_z(coeffs: ArrayLike, angle: ArrayLike) -> NDArray[np.float64]:
     coeffs
         Shape (N * N,), (N * N, C) or batched (..., N * N, C).
     angle
-        Radians, scalar or broadcasting with the batch axes (...,). Positive
-        angles turn +X towards +Y.
+        Radians, finite, scalar or broadcasting with the batch axes (...,).
+        Positive angles turn +X towards +Y. An empty array of angles gives an
+        empty batch of results.
 
     Returns
     -------
@@ -463,10 +519,17 @@ def rotate_z(coeffs: ArrayLike, angle: ArrayLike) -> NDArray[np.float64]:
     if c.ndim < 2:
         raise ValueError(f"coeffs must have shape (N*N,) or (..., N*N, C), got {c.shape}")
     bands = _coeff_bands(c, axis=-2)
+    try:
+        shape = np.broadcast_shapes(c.shape, a.shape + (1, 1))
+    except ValueError:
+        raise ValueError(
+            f"angle must broadcast with the batch axes of coeffs: shapes {a.shape} and {c.shape[:-2]}"
+        ) from None
+    check_size(math.prod(shape), "angle" if a.size > 1 else "coeffs", "rotated coefficients")
     pos, neg, ms = _z_pairs(bands)
+    a = np.fmod(a, 2.0 * math.pi)  # m * angle stays small, so cos and sin keep their digits
     ma = a[..., None] * ms  # (..., P)
     cos, sin = np.cos(ma)[..., None], np.sin(ma)[..., None]
-    shape = np.broadcast_shapes(c.shape, a.shape + (1, 1))
     out = np.array(np.broadcast_to(c, shape))
     cp, cn = c[..., pos, :], c[..., neg, :]
     out[..., pos, :] = cp * cos - cn * sin
@@ -475,7 +538,8 @@ def rotate_z(coeffs: ArrayLike, angle: ArrayLike) -> NDArray[np.float64]:
 
 
 def rotation_z_matrix(angle: float) -> NDArray[np.float64]:
-    """3x3 matrix of the rotation about +Z by ``angle`` radians (+X towards +Y)."""
+    """3x3 matrix of the rotation about +Z by ``angle`` radians (one finite number; +X towards +Y)."""
+    angle = math.fmod(check_scalar(angle, "angle", unit="rad"), 2.0 * math.pi)
     c, s = math.cos(angle), math.sin(angle)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
@@ -559,10 +623,10 @@ def convolve(coeffs: ArrayLike, per_band: ArrayLike) -> NDArray[np.float64]:
     return c * (factors if c.ndim == 1 else factors[:, None])
 
 
-@lru_cache(maxsize=None)
+@cache
 def _cosine_lobe(bands: int) -> NDArray[np.float64]:
     a = np.zeros(bands)
-    for l in range(bands):  # noqa: E741
+    for l in range(bands):
         if l == 1:
             a[l] = 2.0 * math.pi / 3.0
         elif l % 2 == 0:

@@ -98,7 +98,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from skysh._checks import as_float_array, check_range
+from skysh._checks import as_float_array, check_flag, check_range, check_size, short_repr
 
 __all__ = [
     "LATITUDE_RANGE",
@@ -171,8 +171,13 @@ class SolarEphemeris(NamedTuple):
 # --------------------------------------------------------------------------- time
 
 
-def _utc(when: _dt.datetime | str) -> _dt.datetime:
-    """Return ``when`` as an aware UTC datetime; refuse naive datetimes and other types."""
+_UTC_RANGE_TEXT: str = "0001-01-01T00:00:00Z .. 9999-12-31T23:59:59.999999Z"
+"""The instants a ``when`` may name: Python's datetime range, in UTC."""
+
+
+def _utc(when: _dt.datetime | str, name: str = "when") -> _dt.datetime:
+    """Return ``when`` as an aware UTC datetime; refuse naive datetimes, other types and instants
+    outside Python's datetime range in UTC. ``name`` is the parameter (or flag) named in messages."""
     if isinstance(when, str):
         text = when.strip()
         if text[-1:] in ("Z", "z"):  # Python 3.10's fromisoformat does not read "Z"
@@ -181,23 +186,32 @@ def _utc(when: _dt.datetime | str) -> _dt.datetime:
             parsed = _dt.datetime.fromisoformat(text)
         except ValueError as error:
             raise ValueError(
-                f"when must be an ISO-8601 date-time with an offset, e.g. '2024-06-21T12:00:00+02:00', got {when!r}"
+                f"{name} must be an ISO-8601 date-time with an offset, e.g. '2024-06-21T12:00:00+02:00', got {short_repr(when)}"
             ) from error
         if parsed.tzinfo is None or parsed.utcoffset() is None:
             raise ValueError(
-                f"when must carry a UTC offset (e.g. '+02:00' or 'Z'), got {when!r}: a local time alone is ambiguous"
+                f"{name} must carry a UTC offset (e.g. '+02:00' or 'Z'), got {short_repr(when)}: a local time alone is ambiguous"
             )
         when = parsed
     if not isinstance(when, _dt.datetime):
         raise ValueError(
-            f"when must be a timezone-aware datetime.datetime or an ISO-8601 string with an offset, got {when!r}"
+            f"{name} must be a timezone-aware datetime.datetime or an ISO-8601 string with an offset, got {short_repr(when)}"
         )
-    if when.tzinfo is None or when.utcoffset() is None:
+    try:
+        offset = when.utcoffset()
+    except (TypeError, ValueError) as error:  # a tzinfo whose utcoffset() misbehaves
+        raise ValueError(f"{name} has a tzinfo whose utcoffset() fails: {error}") from error
+    if when.tzinfo is None or offset is None:
         raise ValueError(
-            f"when must be timezone-aware: give it a tzinfo, e.g. datetime.timezone.utc or "
+            f"{name} must be timezone-aware: give it a tzinfo, e.g. datetime.timezone.utc or "
             f"zoneinfo.ZoneInfo('Europe/Vienna'), got the naive {when.isoformat()}"
         )
-    return when.astimezone(_dt.timezone.utc)
+    try:
+        return when.astimezone(_dt.timezone.utc)
+    except OverflowError:  # e.g. 0001-01-01T00:00:00+05:00 is still year 0 in UTC
+        raise ValueError(
+            f"{name} must lie in {_UTC_RANGE_TEXT} once converted to UTC (Python's datetime range), got {when.isoformat()}"
+        ) from None
 
 
 def _julian_century(utc: _dt.datetime) -> float:
@@ -342,20 +356,24 @@ def position_unchecked(
         UTC offset. Naive datetimes are refused.
     refraction
         Apply NOAA's standard-atmosphere refraction (default): the zenith is
-        then the apparent one. ``False``: the geometric zenith.
+        then the apparent one. ``False``: the geometric zenith. A bool.
 
     Returns
     -------
     SunPosition
         ``(sun_zenith, sun_azimuth)`` in radians: zenith in [0, pi], azimuth in
         (-pi, pi] from +X = East towards +Y = North. Scalars (numpy float64)
-        for scalar inputs, else arrays of the broadcast shape.
+        for scalar inputs, else arrays of the broadcast shape (empty arrays
+        give empty results).
 
     Raises
     ------
     ValueError
-        Latitude or longitude out of range, NaN or inf; ``when`` naive or not
-        a date-time.
+        Latitude or longitude out of range, NaN or inf, not numbers, or too
+        many places (``skysh._checks.MAX_ARRAY_ELEMENTS``); ``when`` naive,
+        not a date-time, or outside Python's datetime range once in UTC.
+    TypeError
+        ``refraction`` not a bool.
 
     Examples
     --------
@@ -364,8 +382,7 @@ def position_unchecked(
     >>> bool(z > math.pi / 2)  # midnight in Colorado: the sun is down
     True
     """
-    if not isinstance(refraction, (bool, np.bool_)):
-        raise ValueError(f"refraction must be True or False, got {refraction!r}")
+    refraction = check_flag(refraction, "refraction")
     lat_deg = check_range(latitude, "latitude", *LATITUDE_RANGE, unit="deg")
     lon_deg = check_range(longitude, "longitude", *LONGITUDE_RANGE, unit="deg")
     try:
@@ -374,6 +391,8 @@ def position_unchecked(
         raise ValueError(
             f"latitude and longitude must broadcast together, got shapes {np.shape(lat_deg)} and {np.shape(lon_deg)}"
         ) from error
+    check_size(8 * lat_deg.size, "latitude" if np.size(latitude) >= np.size(longitude) else "longitude",
+               f"{lat_deg.size:,} places")
     utc = _utc(when)
     _, _, _, declination_deg, eot_minutes, _ = _ephemeris_deg(_julian_century(utc))
 
@@ -474,7 +493,7 @@ def compass_to_frame(azimuth: ArrayLike) -> NDArray[np.float64] | np.float64:
     ----------
     azimuth
         Compass azimuth A, radians: North 0, East pi/2, South pi, West 3 pi/2.
-        Any finite value, any shape.
+        Any finite value, any shape (empty gives empty).
 
     Returns
     -------
@@ -499,7 +518,7 @@ def frame_to_compass(azimuth: ArrayLike) -> NDArray[np.float64] | np.float64:
     Parameters
     ----------
     azimuth
-        Frame azimuth phi, radians, any finite value, any shape.
+        Frame azimuth phi, radians, any finite value, any shape (empty gives empty).
 
     Returns
     -------

@@ -196,7 +196,8 @@ class TestRefusals:
         assert err.startswith("skysh: error: ") and err.count("\n") == 1, err
 
     def test_sun_below_the_horizon(self, capsys: pytest.CaptureFixture) -> None:
-        code, out, err = run(["coeffs", "--lat", "48.21", "--lon", "16.37", "--time", "2024-06-21T01:00:00+02:00", "--turbidity", "3"], capsys)
+        argv = ["coeffs", "--lat", "48.21", "--lon", "16.37", "--time", "2024-06-21T01:00:00+02:00", "--turbidity", "3"]
+        code, out, err = run(argv, capsys)
         assert code == 2 and out == ""
         assert err.count("\n") == 1 and "below the horizon" in err
 
@@ -218,7 +219,8 @@ class TestHelp:
         "command, needles",
         [
             ([], ["coeffs", "export", "render", "fit", "report", "degrees", "cd/m^2", "status 2"]),
-            (["coeffs"], ["degrees, [0, 90]", "[2.5, 6]", "[1, 7]", "cd/m^2*sr", "--normalise", "R, G and B", "[-90, 90]", "ISO8601"]),
+            (["coeffs"], ["degrees, [0, 90]", "[2.5, 6]", "[1, 7]", "cd/m^2*sr", "--normalise", "R, G and B", "[-90, 90]",
+                          "ISO8601"]),
             (["export"], ["radians", "[2.5, 6]", "float32", "double", "[1, 7]"]),
             (["render"], ["degrees, [0, 90]", "[2.5, 6]", "[16, 4096]", "azimuth -180"]),
         ],
@@ -255,8 +257,236 @@ class TestTools:
             err = capsys.readouterr().err
             assert "tools/error_report.py" in err and err.count("\n") == 1
 
-    def test_installed_package_says_tools_need_a_checkout(self, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture) -> None:
+    def test_installed_package_says_tools_need_a_checkout(
+        self, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture
+    ) -> None:
         monkeypatch.setattr(cli, "_tools_dir", lambda: None)
         assert cli.main(["fit", "--quick"]) == 2
         err = capsys.readouterr().err
         assert "source checkout" in err and err.count("\n") == 1
+
+
+# --------------------------------------------------------------------------- #
+# What a new user meets (issue 13): labels that say one true thing, no noise
+# --------------------------------------------------------------------------- #
+NO_MATPLOTLIB = "import sys; sys.modules['matplotlib'] = None  # a plain install: colour-science without matplotlib\n"
+"""Prefix of a subprocess script that makes ``import matplotlib`` fail, as on a fresh machine."""
+
+
+def run_without_matplotlib(code: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-c", NO_MATPLOTLIB + code], capture_output=True, text=True, cwd=ROOT)
+
+
+class TestLabels:
+    def test_y_up_header_describes_the_y_up_frame(self, capsys: pytest.CaptureFixture) -> None:
+        _, out, _ = run(["coeffs", *SUN, "--up", "y"], capsys)
+        header = "\n".join(line for line in out.splitlines() if line.startswith("#"))
+        assert "Y up (zenith +Y)" in header and "Z up" not in header and "to_y_up" in header
+        _, out, _ = run(["coeffs", *SUN], capsys)
+        assert "Z up (zenith)" in out and "Y up" not in out
+
+    def test_one_band_is_singular(self, capsys: pytest.CaptureFixture) -> None:
+        _, out, _ = run(["coeffs", *SUN, "--bands", "1"], capsys)
+        assert ", 1 band;" in out and "1 bands" not in out
+        _, out, _ = run(["coeffs", *SUN, "--bands", "2"], capsys)
+        assert ", 2 bands;" in out
+
+    @pytest.mark.parametrize(("zenith", "azimuth"), [("30", "45"), ("12.3456789012345", "-0.1"), ("0", "720")])
+    def test_degrees_are_echoed_as_given(self, zenith: str, azimuth: str, capsys: pytest.CaptureFixture) -> None:
+        payload = coeffs_json(["--sun-zenith", zenith, "--sun-azimuth", azimuth, "--turbidity", "3"], capsys)
+        assert payload["sun_zenith_deg"] == float(zenith) and payload["sun_azimuth_deg"] == float(azimuth)
+        assert payload["sun_zenith_rad"] == math.radians(float(zenith))  # computed from the degrees given
+        _, out, _ = run(["coeffs", "--sun-zenith", zenith, "--sun-azimuth", azimuth, "--turbidity", "3"], capsys)
+        assert f"sun zenith {zenith} deg, azimuth {azimuth} deg" in out
+
+    def test_refusal_prints_the_value_given(self, capsys: pytest.CaptureFixture) -> None:
+        code, _, err = run(["coeffs", "--sun-zenith", "90.0000001", "--turbidity", "3"], capsys)
+        assert code == 2 and "got 90.0000001" in err
+        code, _, err = run(["coeffs", "--sun-zenith", "30", "--turbidity", "6.0000000001"], capsys)
+        assert code == 2 and "got 6.0000000001" in err
+
+    def test_table_prints_rounding_noise_as_zero(self, sky: SkySH, capsys: pytest.CaptureFixture) -> None:
+        """--up y at azimuth 0: (1,0), (2,-1), (2,1) are zero up to the rotation's rounding."""
+        argv = ["--sun-zenith", "30", "--sun-azimuth", "0", "--turbidity", "3", "--up", "y"]
+        exact = sh.to_y_up(sky.coefficients(math.radians(30), 3.0, 0.0))
+        noise = np.abs(exact[[2, 5, 7]]).max() / np.abs(exact[0]).max()
+        assert noise < cli.TABLE_ZERO_BELOW  # rounding noise: far below the threshold
+        payload = coeffs_json(argv, capsys)
+        np.testing.assert_array_equal(payload["coefficients"], exact)  # JSON keeps every digit
+        _, out, _ = run(["coeffs", *argv], capsys)
+        rows = [line.split() for line in out.splitlines() if line and not line.startswith("#")][1:]
+        assert all(value == "0" for i in (2, 5, 7) for value in rows[i][3:])
+        assert all(value != "0" for i in (0, 1, 3, 4, 6, 8) for value in rows[i][3:])
+        assert f"below {cli.TABLE_ZERO_BELOW:g} x |DC|" in out
+
+    @pytest.mark.parametrize(("factor", "fmt", "needle"), [("1e308", "json", "overflow float64"),
+                                                           ("1e36", "glsl", "overflow float32"),
+                                                           ("1e-320", "json", "underflow float64"),
+                                                           ("1e-50", "hlsl", "underflow float32")])
+    def test_exposure_that_overflows_is_refused(self, factor: str, fmt: str, needle: str,
+                                                capsys: pytest.CaptureFixture) -> None:
+        code, out, err = run(["coeffs", *SUN, "--exposure", factor, "--format", fmt], capsys)
+        assert code == 2 and out == "" and "--exposure" in err and needle in err, err
+
+    def test_largest_exposure_that_fits_is_accepted(self, sky: SkySH, capsys: pytest.CaptureFixture) -> None:
+        """Negative control of the refusal above: a factor just within float64 passes, finite."""
+        largest = np.abs(reference(sky)).max()
+        factor = repr(float(np.finfo(np.float64).max / largest / 2))
+        payload = coeffs_json([*SUN, "--exposure", factor], capsys)
+        assert np.all(np.isfinite(payload["coefficients"]))
+
+    @pytest.mark.parametrize("when", ["0001-01-01T00:00:00+05:00", "9999-12-31T23:59:59-14:00"])
+    def test_time_beyond_the_datetime_range_is_one_line(self, when: str) -> None:
+        result = subprocess.run(
+            [sys.executable, "-m", "skysh", "coeffs", "--lat", "0", "--lon", "0", "--time", when, "--turbidity", "3"],
+            capture_output=True, text=True, cwd=ROOT,
+        )
+        assert result.returncode == 2 and result.stdout == "" and "Traceback" not in result.stderr
+        assert result.stderr.startswith("skysh: error: --time must lie in") and result.stderr.count("\n") == 1
+
+    def test_an_unexpected_failure_is_one_line(self, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture) -> None:
+        def broken(args: object) -> int:
+            raise RuntimeError("something\nunforeseen")
+
+        parser = cli.build_parser()
+        monkeypatch.setattr(cli, "build_parser", lambda: parser)
+        parser._subparsers._group_actions[0].choices["coeffs"].set_defaults(handler=broken)  # type: ignore[union-attr]
+        code, out, err = run(["coeffs", *SUN], capsys)
+        assert code == cli.EXIT_INTERNAL and out == ""
+        assert err == "skysh: internal error: RuntimeError: something unforeseen (please report it with the command line)\n"
+
+    def test_render_names_its_output_flag(self, capsys: pytest.CaptureFixture) -> None:
+        code, _, err = run(["render", *SUN, "--width", "16", "--out", "/nonexistent-dir/sky.png"], capsys)
+        assert code == 2 and err.startswith("skysh: error: --out /nonexistent-dir/sky.png: ") and err.count("\n") == 1
+
+
+class TestQuietWithoutMatplotlib:
+    """colour-science warns on import when matplotlib is missing; skysh's commands stay quiet."""
+
+    def test_the_shim_makes_colour_science_warn(self) -> None:
+        """Negative control: without skysh's filter the warning is there, so the tests below can see it."""
+        result = run_without_matplotlib("import colour")
+        assert "Matplotlib" in result.stderr and "not available" in result.stderr
+
+    @pytest.mark.parametrize(
+        "argv",
+        [
+            ["coeffs", *SUN, "--colourspace", "ACEScg"],
+            ["render", *SUN, "--width", "16", "--out", "OUT"],
+        ],
+        ids=["coeffs --colourspace", "render"],
+    )
+    def test_commands(self, argv: list[str], tmp_path: Path) -> None:
+        argv = [str(tmp_path / "sky.png") if a == "OUT" else a for a in argv]
+        result = run_without_matplotlib(f"from skysh import cli; raise SystemExit(cli.main({argv!r}))")
+        assert result.returncode == 0 and result.stderr == "", result.stderr
+
+
+# --------------------------------------------------------------------------- #
+# The sun and the ground (issue 15)
+# --------------------------------------------------------------------------- #
+class TestSunAndGround:
+    @pytest.mark.parametrize("albedo, value", [("0.3", 0.3), ("0.2,0.3,0.4", (0.2, 0.3, 0.4))])
+    def test_coeffs_with_the_sun_and_the_ground(self, sky: SkySH, albedo: str, value: object,
+                                                capsys: pytest.CaptureFixture) -> None:
+        payload = coeffs_json([*SUN, "--sun", "--ground-albedo", albedo], capsys)
+        expected = reference(sky, sun=True, ground_albedo=value)
+        np.testing.assert_allclose(payload["coefficients"], expected, rtol=0, atol=EXACT * np.abs(expected).max())
+        assert payload["sun"] is True and np.allclose(payload["ground_albedo"], value)
+        code, out, _ = run(["coeffs", *SUN, "--sun", "--ground-albedo", albedo], capsys)
+        assert code == 0 and "the sun's disk" in out.splitlines()[0] and "ground albedo" in out.splitlines()[0]
+
+    def test_engine_takes_the_lit_radiance(self, sky: SkySH, capsys: pytest.CaptureFixture) -> None:
+        from skysh import engines
+
+        payload = coeffs_json([*SUN, "--sun", "--ground-albedo", "0.25", "--engine", "threejs"], capsys)
+        radiance = reference(sky, sun=True, ground_albedo=0.25, gibbs=False, dering=True)
+        expected = engines.convert(radiance, "threejs")
+        np.testing.assert_allclose(payload["values"], expected, rtol=0, atol=EXACT * np.abs(expected).max())
+
+    def test_sun_light(self, sky: SkySH, capsys: pytest.CaptureFixture) -> None:
+        payload = coeffs_json([*SUN, "--sun-light"], capsys)
+        direction, rgb = sky.sun_light(math.radians(30), 3.0, math.radians(45))
+        np.testing.assert_allclose(payload["sun_direction"], direction, rtol=0, atol=1e-15)
+        np.testing.assert_allclose(payload["sun_illuminance"], rgb, rtol=EXACT)
+        assert payload["units"] == "lux" and "directional light" in payload["quantity"]
+
+    def test_sun_light_frames(self, sky: SkySH, capsys: pytest.CaptureFixture) -> None:
+        from skysh import engines
+
+        direction = sky.sun_light(math.radians(30), 3.0, math.radians(45))[0]
+        y_up = coeffs_json([*SUN, "--sun-light", "--up", "y"], capsys)["sun_direction"]
+        np.testing.assert_allclose(y_up, sh.Y_UP_MATRIX @ direction, rtol=0, atol=1e-15)
+        assert y_up[1] == pytest.approx(math.cos(math.radians(30)))  # the zenith is +Y
+        for engine in ("threejs", "unity", "unreal"):
+            got = coeffs_json([*SUN, "--sun-light", "--engine", engine], capsys)["sun_direction"]
+            expected = engines.sun_direction(math.radians(30), math.radians(45), engine)
+            np.testing.assert_allclose(got, expected, rtol=0, atol=1e-15)
+
+    def test_sun_light_scales_as_the_coefficients(self, sky: SkySH, capsys: pytest.CaptureFixture) -> None:
+        rgb = sky.sun_light(math.radians(30), 3.0, math.radians(45))[1]
+        exposed = coeffs_json([*SUN, "--sun-light", "--exposure", "0.001"], capsys)["sun_illuminance"]
+        np.testing.assert_allclose(exposed, 0.001 * rgb, rtol=EXACT)
+        normalised = coeffs_json([*SUN, "--sun-light", "--normalise", "--irradiance"], capsys)["sun_illuminance"]
+        factor = cli.normalise_factor(reference(sky, irradiance=True), True)
+        np.testing.assert_allclose(normalised, factor * rgb, rtol=EXACT)
+
+    @pytest.mark.parametrize("fmt", ["table", "csv", "glsl", "hlsl", "c"])
+    def test_sun_light_formats(self, sky: SkySH, fmt: str, capsys: pytest.CaptureFixture) -> None:
+        code, out, err = run(["coeffs", *SUN, "--sun-light", "--format", fmt], capsys)
+        assert code == 0, err
+        rgb = sky.sun_light(math.radians(30), 3.0, math.radians(45))[1]
+        numbers = [float(v) for v in re.findall(r"-?\d+\.\d*(?:e[+-]?\d+)?", out.split("illuminance")[-1]
+                                                      if fmt == "table" else out.split("ILLUMINANCE")[-1]
+                                                      if fmt != "csv" else out.splitlines()[-1])]
+        rtol = 1e-6 if fmt in ("table", "glsl", "hlsl") else EXACT  # 7 digits or float32
+        np.testing.assert_allclose(numbers[-3:], rgb, rtol=rtol)
+
+    @pytest.mark.parametrize("argv, needle", [
+        (["--ground-albedo", "1.5"], "--ground-albedo"), (["--ground-albedo", "0.1,0.2"], "--ground-albedo"),
+        (["--ground-albedo", "nan"], "--ground-albedo"), (["--ground-albedo", "red"], "--ground-albedo"),
+        (["--ground-albedo", "0.1,0.2,-0.3"], "--ground-albedo"), (["--sun-light", "--sun"], "--sun-light"),
+        (["--sun-light", "--engine", "threejs", "--format", "snippet"], "--sun-light"),
+    ])
+    def test_refusals(self, argv: list[str], needle: str, capsys: pytest.CaptureFixture) -> None:
+        code, out, err = run(["coeffs", *SUN, *argv], capsys)
+        assert code == 2 and out == "" and err.startswith("skysh: error: ") and err.count("\n") == 1
+        assert needle in err
+
+    def test_render_with_the_sun_and_the_ground(self, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+        out = tmp_path / "scene.png"
+        code, stdout, err = run(["render", *SUN, "--sun", "--ground-albedo", "0.3,0.2,0.1", "--width", "32",
+                                 "--out", str(out)], capsys)
+        assert code == 0, err
+        assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and "wrote" in stdout
+
+
+class TestView:
+    def test_out_writes_the_page(self, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+        status, out, _ = run(["view", "--out", str(tmp_path / "page")], capsys)
+        assert status == 0 and (tmp_path / "page" / "index.html").is_file()
+        assert (tmp_path / "page" / "index.html").resolve().as_uri() in out
+
+    def test_port_with_out_is_refused(self, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+        status, _, err = run(["view", "--out", str(tmp_path), "--port", "8000"], capsys)
+        assert status == cli.EXIT_USAGE and "--port" in err and err.count("\n") == 1
+
+    def test_serves_on_loopback_and_stops_on_ctrl_c(self) -> None:
+        import signal
+        import urllib.request
+
+        process = subprocess.Popen(
+            [sys.executable, "-m", "skysh", "view", "--port", "0"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+            text=True, cwd=ROOT,
+        )
+        try:
+            line = process.stdout.readline() if process.stdout else ""
+            address = re.search(r"http://127\.0\.0\.1:\d+/", line)
+            assert address, line
+            with urllib.request.urlopen(address.group(0), timeout=30) as response:
+                assert response.status == 200 and b"<html" in response.read().lower()
+            process.send_signal(signal.SIGINT)
+            assert process.wait(timeout=30) == 0
+        finally:
+            if process.poll() is None:
+                process.kill()

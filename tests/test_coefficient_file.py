@@ -2,13 +2,15 @@
 Tests of :mod:`skysh.coefficient_file`
 ======================================
 
-The format (version 2) and its writer: round trips (identical arrays,
-metadata as stored), byte-for-byte determinism, members read by independent
-readers (:mod:`zipfile`, :func:`numpy.load`, :mod:`numpy.lib.format`), the
-content hash recomputed here from its documented definition with
-:mod:`hashlib`, the bounds (a file at every bound is accepted), the colourspace
-list checked against colour-science, and the ordinary refusals of the reader
-and the writer. Hostile and corrupted files are in tests/test_corrupt_file.py.
+The format (version 3) and its writer: round trips (identical arrays, the sky's
+and the sun's, metadata as stored), byte-for-byte determinism, members read by
+independent readers (:mod:`zipfile`, :func:`numpy.load`), the content hash
+recomputed here from its documented definition with :mod:`hashlib`, the bounds
+(a file at every bound is accepted), the colourspace list checked against
+colour-science, the ordinary refusals of the reader (versions 1 and 2 by name)
+and the writer, and the named-table scheme: a further table (issue 18's kind)
+added by one :class:`~skysh.coefficient_file.TableSpec`, with no other change.
+Hostile and corrupted files are in tests/test_corrupt_file.py.
 
 Files that the package's writer refuses to write are made here with
 :func:`numpy.savez` (an independent writer). No tolerances: a round trip must
@@ -20,17 +22,21 @@ from __future__ import annotations
 import hashlib
 import json
 import zipfile
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 import pytest
 
 from skysh import coefficient_file as cf
-from skysh import poly
+from skysh import poly, sunlight
 from skysh.runtime import SkySH
 
-ENTRIES: tuple[str, ...] = ("format", "format_version", "table", "degrees", "metadata")
+ENTRIES: tuple[str, ...] = ("format", "format_version", "table", "degrees", "sun_table", "sun_degrees", "metadata")
+
+SRGB_FROM_XYZ: list[list[float]] = [[3.2406, -1.5372, -0.4986], [-0.9689, 1.8758, 0.0415], [0.0557, -0.2040, 1.0570]]
+"""An XYZ -> RGB matrix for the synthetic tables (IEC 61966-2-1's rounded sRGB; any 3 x 3 within bounds would do)."""
 
 
 def _canonical(value: Any) -> bytes:
@@ -45,12 +51,25 @@ def shipped_entries() -> dict[str, np.ndarray]:
         return {key: data[key] for key in data.files}
 
 
+def _sun(seed: int = 1, degrees: tuple[int, int] = (3, 2)) -> cf.NamedTable:
+    table = np.random.default_rng(seed).normal(size=((degrees[0] + 1) * (degrees[1] + 1), 1, 3))
+    return cf.NamedTable(table=table, degrees=np.array([degrees], dtype=np.int64))
+
+
 def _small_table(bands: int = 3, degrees: tuple[int, int] = (4, 2), seed: int = 0) -> cf.SkyTable:
     rng = np.random.default_rng(seed)
     table = rng.normal(size=((degrees[0] + 1) * (degrees[1] + 1), bands * (bands + 1) // 2, 3))
     metadata = {"colourspace": "sRGB", "errors": {"by_bands": {"1": {"e_mean_worst": 1e-5}}}, "note": "ünïcode ✓",
-                "nested": [1, 2.5, None, True]}
-    return cf.SkyTable(table=table, degrees=np.tile(np.array(degrees, dtype=np.int64), (bands, 1)), metadata=metadata)
+                "nested": [1, 2.5, None, True], "tables": {"sun": {"rgb_from_xyz": SRGB_FROM_XYZ, "errors": {"worst": 1e-6}}}}
+    return cf.SkyTable(table=table, degrees=np.tile(np.array(degrees, dtype=np.int64), (bands, 1)), metadata=metadata,
+                       tables={"sun": _sun()})
+
+
+def _sun_block(degrees: list[list[int]], colourspace: str = "sRGB", **extra: Any) -> dict[str, Any]:
+    """The block write() stores for the sun: the format's fixed fields (typed from the module), degrees, colourspace."""
+    fields = {"air_mass_range": list(sunlight.SUN_AIR_MASS_RANGE), "basis": sunlight.SUN_BASIS, "domain": cf.DOMAIN,
+              "term_order": cf.TERM_ORDER, "units": sunlight.SUN_UNITS, "variables": sunlight.SUN_VARIABLES}
+    return {**fields, "colourspace": colourspace, "degrees": degrees, **extra}
 
 
 def _write_raw(path: Path, entries: dict[str, Any], compressed: bool = False) -> Path:
@@ -77,7 +96,8 @@ def _rehashed(entries: dict[str, np.ndarray], **metadata_changes: Any) -> dict[s
     """Entries whose metadata is changed and whose hash is then made consistent (a hostile but careful writer)."""
     metadata = json.loads(bytes(entries["metadata"]).decode("ascii"))
     metadata.update(metadata_changes)
-    metadata[cf.HASH_KEY] = cf.content_sha256(entries["table"], entries["degrees"], metadata)
+    sun = cf.NamedTable(entries["sun_table"], entries["sun_degrees"])
+    metadata[cf.HASH_KEY] = cf.content_sha256(entries["table"], entries["degrees"], metadata, {"sun": sun})
     return dict(entries, metadata=np.frombuffer(_canonical(metadata), dtype=np.uint8))
 
 
@@ -90,8 +110,14 @@ class TestRoundTrip:
         np.testing.assert_array_equal(back.table, original.table)
         np.testing.assert_array_equal(back.degrees, original.degrees)
         assert back.table.dtype == np.float64 and back.degrees.dtype == np.int64
-        # Stored: the caller's metadata plus the runtime fields and the hash.
-        added = {"domain": cf.DOMAIN, "basis": cf.BASIS, "term_order": cf.TERM_ORDER, "degrees": [[4, 2]] * 3, "bands": 3}
+        assert list(back.tables) == ["sun"]
+        np.testing.assert_array_equal(back.tables["sun"].table, original.tables["sun"].table)
+        np.testing.assert_array_equal(back.tables["sun"].degrees, [[3, 2]])
+        assert back.tables["sun"].max_degrees == (3, 2)
+        # Stored: the caller's metadata plus the runtime fields, the sun's block filled in, and the hash.
+        sun = _sun_block([[3, 2]], rgb_from_xyz=SRGB_FROM_XYZ, errors={"worst": 1e-6})
+        added = {"domain": cf.DOMAIN, "basis": cf.BASIS, "term_order": cf.TERM_ORDER, "degrees": [[4, 2]] * 3, "bands": 3,
+                 "tables": {"sun": sun}}
         assert back.metadata == {**original.metadata, **added, cf.HASH_KEY: back.metadata[cf.HASH_KEY]}
         assert back.bands == 3 and back.max_degrees == (4, 2) and back.colourspace == "sRGB"
         assert list(tmp_path.joinpath("sub").iterdir()) == [path]  # no temporary file left
@@ -105,7 +131,8 @@ class TestRoundTrip:
         degrees = np.array([[1, 0], [3, 2], [2, 1]], dtype=np.int64)
         table = np.zeros((4 * 3, 6, 3))
         table[0, :, :] = 1.0
-        back = cf.read(cf.write(tmp_path / "t.npz", cf.SkyTable(table=table, degrees=degrees, metadata={})))
+        metadata = {"tables": {"sun": {"rgb_from_xyz": SRGB_FROM_XYZ}}}
+        back = cf.read(cf.write(tmp_path / "t.npz", cf.SkyTable(table, degrees, metadata, {"sun": _sun()})))
         np.testing.assert_array_equal(back.degrees, degrees)
         assert back.max_degrees == (3, 2) and back.colourspace == "sRGB"
 
@@ -119,8 +146,10 @@ class TestRoundTrip:
         with np.load(path, allow_pickle=False) as data:  # no pickles needed
             assert data.files == list(ENTRIES)
             assert str(data["format"]) == cf.FORMAT == "skysh-coefficients"
-            assert data["format_version"].dtype == np.int64 and int(data["format_version"]) == cf.FORMAT_VERSION == 2
+            assert data["format_version"].dtype == np.int64 and int(data["format_version"]) == cf.FORMAT_VERSION == 3
             assert data["table"].dtype == np.float64 and data["table"].shape == (15, 6, 3)
+            assert data["sun_table"].dtype == np.float64 and data["sun_table"].shape == (12, 1, 3)
+            assert data["sun_degrees"].dtype == np.int64 and data["sun_degrees"].tolist() == [[3, 2]]
             raw = bytes(data["metadata"])
         metadata = json.loads(raw.decode("ascii"))
         assert metadata == cf.read(path).metadata and raw == _canonical(metadata)  # canonical JSON, as documented
@@ -133,19 +162,30 @@ class TestRoundTrip:
 
     def test_content_hash_definition(self, tmp_path: Path) -> None:
         back = cf.read(cf.write(tmp_path / "t.npz", _small_table()))
-        digest = hashlib.sha256(b"skysh-coefficients\n2\n")
+        digest = hashlib.sha256(b"skysh-coefficients\n3\n")
         digest.update(f"table <f8 [15, 6, 3] {15 * 6 * 3 * 8}\n".encode())
         digest.update(back.table.astype("<f8").tobytes())
         digest.update(f"degrees <i8 [3, 2] {3 * 2 * 8}\n".encode())
         digest.update(back.degrees.astype("<i8").tobytes())
+        digest.update(f"sun_table <f8 [12, 1, 3] {12 * 3 * 8}\n".encode())
+        digest.update(back.tables["sun"].table.astype("<f8").tobytes())
+        digest.update(f"sun_degrees <i8 [1, 2] {2 * 8}\n".encode())
+        digest.update(back.tables["sun"].degrees.astype("<i8").tobytes())
         text = _canonical({k: v for k, v in back.metadata.items() if k != cf.HASH_KEY})
         digest.update(f"metadata {len(text)}\n".encode() + text)
         assert back.metadata[cf.HASH_KEY] == digest.hexdigest()
+        assert cf.content_sha256(back.table, back.degrees, back.metadata, back.tables) == digest.hexdigest()
         # Negative control: the hash moves with any number and any metadata field.
         changed = back.table.copy()
         changed[0, 0, 0] = np.nextafter(changed[0, 0, 0], np.inf)
-        assert cf.content_sha256(changed, back.degrees, back.metadata) != digest.hexdigest()
-        assert cf.content_sha256(back.table, back.degrees, dict(back.metadata, colourspace="ACEScg")) != digest.hexdigest()
+        assert cf.content_sha256(changed, back.degrees, back.metadata, back.tables) != digest.hexdigest()
+        sun = back.tables["sun"].table.copy()
+        sun[-1, 0, 2] = np.nextafter(sun[-1, 0, 2], -np.inf)
+        assert cf.content_sha256(back.table, back.degrees, back.metadata,
+                                 {"sun": cf.NamedTable(sun, back.tables["sun"].degrees)}) != digest.hexdigest()
+        assert cf.content_sha256(back.table, back.degrees, back.metadata) != digest.hexdigest()  # without the sun
+        assert cf.content_sha256(back.table, back.degrees, dict(back.metadata, colourspace="ACEScg"),
+                                 back.tables) != digest.hexdigest()
 
     def test_read_arrays_are_read_only(self, tmp_path: Path) -> None:
         back = cf.read(cf.write(tmp_path / "t.npz", _small_table()))
@@ -153,10 +193,13 @@ class TestRoundTrip:
             back.table[0, 0, 0] = 1.0
         with pytest.raises(ValueError):
             back.degrees[0, 0] = 1
+        with pytest.raises(ValueError):
+            back.tables["sun"].table[0, 0, 0] = 1.0
 
     def test_shipped_file(self, tmp_path: Path) -> None:
         sky = cf.read()
         assert sky.bands == 7 and sky.table.shape == (112, 28, 3) and sky.colourspace == "sRGB"
+        assert sky.tables["sun"].table.shape == (91, 1, 3) and sky.tables["sun"].degrees.tolist() == [[12, 6]]
         assert cf.read(cf.default_path()).metadata == sky.metadata
         # Rewriting the shipped tables reproduces the shipped file byte for byte.
         assert cf.write(tmp_path / "copy.npz", sky).read_bytes() == cf.default_path().read_bytes()
@@ -173,6 +216,9 @@ class TestBounds:
     def test_member_bounds_follow_from_the_format(self) -> None:
         rows = cf.MAX_FILE_BANDS * (cf.MAX_FILE_BANDS + 1) // 2
         assert cf.MAX_MEMBER_BYTES["table.npy"] - 256 == (cf.MAX_FILE_DEGREE + 1) ** 2 * rows * 3 * 8
+        assert cf.MAX_MEMBER_BYTES["sun_table.npy"] - 256 == (cf.MAX_FILE_DEGREE + 1) ** 2 * 1 * 3 * 8
+        assert cf.MAX_MEMBER_BYTES["sun_degrees.npy"] - 256 == 2 * 8
+        assert cf.MEMBERS == tuple(f"{e}.npy" for e in ENTRIES) == cf.REQUIRED_MEMBERS
         assert cf.MAX_FILE_BYTES < 1 << 20  # "a hostile file costs a few megabytes"
 
     def test_largest_file_is_accepted(self, tmp_path: Path) -> None:
@@ -180,17 +226,36 @@ class TestBounds:
         bands, top = cf.MAX_FILE_BANDS, cf.MAX_FILE_DEGREE
         table = np.random.default_rng(3).uniform(-cf.MAX_TABLE_MAGNITUDE, cf.MAX_TABLE_MAGNITUDE,
                                                  ((top + 1) ** 2, bands * (bands + 1) // 2, 3))
-        metadata = {"colourspace": "ACES2065-1", "padding": "x" * (cf.MAX_METADATA_BYTES - 2000)}
-        path = cf.write(tmp_path / "big.npz", cf.SkyTable(table, np.full((bands, 2), top, dtype=np.int64), metadata))
+        # The sun at its bounds too: every channel's |values| summing to SUN_MAX_LN, the matrix at MAX_MATRIX_ENTRY.
+        sun = np.full(((top + 1) ** 2, 1, 3), sunlight.SUN_MAX_LN / (top + 1) ** 2)
+        sun[::2] *= -1.0
+        matrix = [[cf.MAX_MATRIX_ENTRY, -cf.MAX_MATRIX_ENTRY, 0]] * 3
+        metadata = {"colourspace": "ACES2065-1", "padding": "x" * (cf.MAX_METADATA_BYTES - 3000),
+                    "tables": {"sun": {"rgb_from_xyz": matrix}}}
+        tables = {"sun": cf.NamedTable(sun, np.array([[top, top]]))}
+        path = cf.write(tmp_path / "big.npz", cf.SkyTable(table, np.full((bands, 2), top, dtype=np.int64), metadata, tables))
         assert cf.MAX_FILE_BYTES - 4096 < path.stat().st_size <= cf.MAX_FILE_BYTES
-        np.testing.assert_array_equal(cf.read(path).table, table)
+        back = cf.read(path)
+        np.testing.assert_array_equal(back.table, table)
+        np.testing.assert_array_equal(back.tables["sun"].table, sun)
 
     def test_file_colourspaces_exist_in_colour_science(self) -> None:
         import colour
 
         for name in cf.FILE_COLOURSPACES:
             assert name in colour.RGB_COLOURSPACES, name
+            # Its XYZ -> RGB matrix fits the bound of a table block's matrix (a file can record it).
+            assert np.abs(np.asarray(colour.RGB_COLOURSPACES[name].matrix_XYZ_to_RGB)).max() <= cf.MAX_MATRIX_ENTRY
         assert "Not A Colourspace" not in colour.RGB_COLOURSPACES  # negative control of the membership test
+
+    def test_shipped_matrix_is_colour_sciences(self) -> None:
+        """The recorded XYZ -> RGB matrix is colour-science's for the file's colourspace, exactly (JSON keeps repr)."""
+        import colour
+
+        sky = cf.read()
+        expected = colour.RGB_COLOURSPACES[sky.colourspace].matrix_XYZ_to_RGB
+        assert sky.metadata["tables"]["sun"]["rgb_from_xyz"] == np.asarray(expected, dtype=np.float64).tolist()
+        assert sky.metadata["tables"]["sun"]["colourspace"] == sky.colourspace
 
     def test_domain_is_the_packages(self) -> None:
         assert cf.DOMAIN == {"sun_zenith": [0.0, np.pi / 2], "turbidity": [2.5, 6.0]}
@@ -198,18 +263,36 @@ class TestBounds:
 
 
 class TestRefusals:
+    @staticmethod
+    def _v2_entries(shipped_entries: dict) -> dict:
+        """The members of a version 2 file (no sun table), its metadata without the sun's block."""
+        metadata = json.loads(bytes(shipped_entries["metadata"]).decode("ascii"))
+        metadata.pop("tables")
+        entries = {k: v for k, v in shipped_entries.items() if not k.startswith("sun_")}
+        return dict(entries, metadata=np.frombuffer(_canonical(metadata), dtype=np.uint8))
+
     def test_version_1_names_the_versions(self, tmp_path: Path, shipped_entries: dict) -> None:
         # Version 1 as skysh 0.1.0 wrote it: savez_compressed, metadata a '<U' string, no hash.
-        metadata = json.loads(bytes(shipped_entries["metadata"]).decode("ascii"))
+        entries = self._v2_entries(shipped_entries)
+        metadata = json.loads(bytes(entries["metadata"]).decode("ascii"))
         metadata.pop(cf.HASH_KEY)
-        entries = dict(shipped_entries, format_version=np.array(1, dtype=np.int64), metadata=np.array(json.dumps(metadata)))
+        entries = dict(entries, format_version=np.array(1, dtype=np.int64), metadata=np.array(json.dumps(metadata)))
         _refused(_write_raw(tmp_path / "v1.npz", entries, compressed=True),
-                 r"format version 1 is no longer read: this skysh \(.*\) reads format version 2 only.*skysh fit --out")
+                 r"format version 1 \(skysh 0.1.0: compressed, no content hash\) is no longer read: this skysh \(.*\) "
+                 r"reads format version 3 only.*skysh fit --out")
 
-    @pytest.mark.parametrize("version", [0, 3, -1, 100])
+    def test_version_2_names_the_versions(self, tmp_path: Path, shipped_entries: dict) -> None:
+        """A version 2 file (five members, hashed, no sun table): refused by its version, not by what it lacks."""
+        entries = dict(self._v2_entries(shipped_entries), format_version=np.array(2, dtype=np.int64))
+        _refused(_write_raw(tmp_path / "v2.npz", entries),
+                 r"format version 2 \(hashed, without the sun's table\) is no longer read: this skysh \(.*\) reads "
+                 r"format version 3 only \(hashed, strictly checked, with the sun's table\); regenerate the file with "
+                 r"`skysh fit --out FILE`")
+
+    @pytest.mark.parametrize("version", [0, 4, -1, 100])
     def test_wrong_format_version(self, tmp_path: Path, shipped_entries: dict, version: int) -> None:
         entries = dict(shipped_entries, format_version=np.array(version, dtype=np.int64))
-        _refused(_write_raw(tmp_path / "v.npz", entries), rf"has format version {version}; .* reads format version 2 only")
+        _refused(_write_raw(tmp_path / "v.npz", entries), rf"has format version {version}; .* reads format version 3 only")
 
     @pytest.mark.parametrize("version", [np.array("one"), np.array(1.5), np.array(True)], ids=["string", "fraction", "bool"])
     def test_malformed_format_version(self, tmp_path: Path, shipped_entries: dict, version: np.ndarray) -> None:
@@ -221,7 +304,7 @@ class TestRefusals:
         _refused(_write_raw(tmp_path / "f.npz", entries), rf"has format '{value}', expected 'skysh-coefficients'")
 
     def test_compressed_members(self, tmp_path: Path, shipped_entries: dict) -> None:
-        _refused(_write_raw(tmp_path / "c.npz", shipped_entries, compressed=True), "compressed; format version 2 stores")
+        _refused(_write_raw(tmp_path / "c.npz", shipped_entries, compressed=True), "compressed; format version 3 stores")
 
     def test_same_content_other_writer(self, tmp_path: Path, shipped_entries: dict) -> None:
         """numpy's own writer, the same content: refused by the byte-for-byte comparison."""
@@ -248,7 +331,7 @@ class TestRefusals:
 
     @pytest.mark.parametrize("path", [3, None.__class__, b"/tmp/x.npz"], ids=["int", "type", "bytes"])
     def test_path_type(self, path: Any) -> None:
-        with pytest.raises(cf.CoefficientFileError, match="path must be a str or os.PathLike"):
+        with pytest.raises(cf.CoefficientFileError, match=r"path must be a str or os.PathLike"):
             cf.read(path)
 
     def test_object_arrays_not_unpickled(self, tmp_path: Path, shipped_entries: dict) -> None:
@@ -261,6 +344,10 @@ class TestRefusals:
     def test_missing_entry(self, tmp_path: Path, shipped_entries: dict, missing: str) -> None:
         entries = {k: v for k, v in shipped_entries.items() if k != missing}
         _refused(_write_raw(tmp_path / "m.npz", entries), rf"lacks the members \['{missing}.npy'\]")
+
+    def test_version_3_without_the_sun(self, tmp_path: Path, shipped_entries: dict) -> None:
+        entries = {k: v for k, v in shipped_entries.items() if not k.startswith("sun_")}
+        _refused(_write_raw(tmp_path / "m.npz", entries), r"lacks the members \['sun_table.npy', 'sun_degrees.npy'\]")
 
     def test_empty_npz(self, tmp_path: Path) -> None:
         _refused(_write_raw(tmp_path / "e.npz", {}), "lacks the members")
@@ -279,18 +366,27 @@ class TestRefusals:
             (lambda e: {"degrees": np.full((8, 2), 1, dtype=np.int64)}, r"1 <= bands <= 7"),
             (lambda e: {"degrees": np.where(np.arange(7)[:, None] == 0, -1, e["degrees"])}, r"degrees must lie in \[0, 31\]"),
             (lambda e: {"degrees": np.full((7, 2), 32, dtype=np.int64)}, r"degrees must lie in \[0, 31\]"),
+            (lambda e: {"sun_table": e["sun_table"][:-1]}, r"sun_table must have shape \(91, 1, 3\).*got \(90, 1, 3\)"),
+            (lambda e: {"sun_table": e["sun_table"][:, 0]}, r"sun_table must have shape \(91, 1, 3\)"),
+            (lambda e: {"sun_table": np.repeat(e["sun_table"], 3, axis=1)}, r"sun_table must have shape \(91, 1, 3\)"),
+            (lambda e: {"sun_degrees": np.array([[12, 6], [12, 6]])}, r"sun_degrees must have shape \(groups, 2\) with 1 <= "
+             r"groups <= 1"),
+            (lambda e: {"sun_degrees": np.array([[12, 5]])}, r"sun_table must have shape \(78, 1, 3\)"),
+            (lambda e: {"sun_degrees": np.array([[32, 6]])}, r"sun_degrees must lie in \[0, 31\]"),
         ],
         ids=["terms", "rows", "channels", "ndim", "bands-vs-rows", "degree-columns", "degrees-1d", "no-bands",
-             "too-many-bands", "negative-degree", "degree-too-high"],
+             "too-many-bands", "negative-degree", "degree-too-high", "sun-terms", "sun-2d", "sun-rows", "sun-groups",
+             "sun-degrees-vs-terms", "sun-degree-too-high"],
     )
     def test_inconsistent_shapes(self, tmp_path: Path, shipped_entries: dict, change, match: str) -> None:
         _refused(_write_raw(tmp_path / "s.npz", dict(shipped_entries, **change(shipped_entries))), match)
 
     @pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf])
-    def test_non_finite_table(self, tmp_path: Path, shipped_entries: dict, value: float) -> None:
-        table = shipped_entries["table"].copy()
-        table[5, 3, 1] = value
-        _refused(_write_raw(tmp_path / "n.npz", dict(shipped_entries, table=table)), "table holds NaN or inf")
+    @pytest.mark.parametrize("entry", ["table", "sun_table"])
+    def test_non_finite_table(self, tmp_path: Path, shipped_entries: dict, value: float, entry: str) -> None:
+        table = shipped_entries[entry].copy()
+        table[5, 0, 1] = value
+        _refused(_write_raw(tmp_path / "n.npz", dict(shipped_entries, **{entry: table})), f"{entry} holds NaN or inf")
 
     @pytest.mark.parametrize(
         "text, match",
@@ -356,13 +452,65 @@ class TestWriteRefusals:
     def test_metadata_refused(self, tmp_path: Path, metadata: dict, match: str) -> None:
         good = _small_table()
         with pytest.raises(cf.CoefficientFileError, match=match):
-            cf.write(tmp_path / "x.npz", cf.SkyTable(table=good.table, degrees=good.degrees, metadata=metadata))
+            cf.write(tmp_path / "x.npz", cf.SkyTable(good.table, good.degrees, {**good.metadata, **metadata}, good.tables))
+        assert not (tmp_path / "x.npz").exists()
+
+    @pytest.mark.parametrize(
+        "block, match",
+        [
+            ({}, r"metadata tables\['sun'\] lacks the fields \['rgb_from_xyz'\]"),
+            ({"rgb_from_xyz": [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]}, "rgb_from_xyz must be a 3 x 3 list of numbers within"),
+            ({"rgb_from_xyz": [[16.5, 0, 0], [0, 1, 0], [0, 0, 1]]}, r"within \+-16"),
+            ({"rgb_from_xyz": [[True, 0, 0], [0, 1, 0], [0, 0, 1]]}, "rgb_from_xyz must be"),
+            ({"rgb_from_xyz": [["1", 0, 0], [0, 1, 0], [0, 0, 1]]}, "rgb_from_xyz must be"),
+            ({"rgb_from_xyz": "identity"}, "rgb_from_xyz must be"),
+            ({"rgb_from_xyz": SRGB_FROM_XYZ, "units": "lux"}, r"tables\['sun'\] units 'lux' differs"),
+            ({"rgb_from_xyz": SRGB_FROM_XYZ, "air_mass_range": [1.0, 36.5]}, "air_mass_range .* differs"),
+            ({"rgb_from_xyz": SRGB_FROM_XYZ, "variables": {"x": "theta"}}, "variables .* differs"),
+            ({"rgb_from_xyz": SRGB_FROM_XYZ, "basis": cf.BASIS}, r"tables\['sun'\] basis .* differs"),
+            ({"rgb_from_xyz": SRGB_FROM_XYZ, "colourspace": "ACEScg"}, "colourspace 'ACEScg' differs from 'sRGB'"),
+            ({"rgb_from_xyz": SRGB_FROM_XYZ, "degrees": [[4, 2]]}, r"degrees \[\[4, 2\]\] differs from \[\[3, 2\]\]"),
+            ("a block", r"tables\['sun'\] must be a JSON object"),
+        ],
+        ids=["no-matrix", "matrix-shape", "matrix-entry", "matrix-bool", "matrix-text", "matrix-str", "units",
+             "air-mass", "variables", "basis", "colourspace", "degrees", "not-object"],
+    )
+    def test_sun_block_refused(self, tmp_path: Path, block: Any, match: str) -> None:
+        good = _small_table()
+        with pytest.raises(cf.CoefficientFileError, match=match):
+            cf.write(tmp_path / "x.npz", cf.SkyTable(good.table, good.degrees, {"tables": {"sun": block}}, good.tables))
+        assert not (tmp_path / "x.npz").exists()
+
+    def test_sun_table_refused(self, tmp_path: Path) -> None:
+        good = _small_table()
+
+        def write(tables: Any, metadata: dict | None = None) -> None:
+            meta = good.metadata if metadata is None else metadata
+            cf.write(tmp_path / "x.npz", cf.SkyTable(good.table, good.degrees, meta, tables))
+
+        with pytest.raises(cf.CoefficientFileError, match=r"holds the tables \['sun'\]; this SkyTable has none"):
+            write({}, {})
+        with pytest.raises(cf.CoefficientFileError, match=r"sun_table holds \|value\| 101, above 100 \(SUN_MAX_LN\)"):
+            write({"sun": cf.NamedTable(np.full((12, 1, 3), 101.0) * (np.arange(12) == 0)[:, None, None], np.array([[3, 2]]))})
+        with pytest.raises(cf.CoefficientFileError, match=r"sun_table sums \|values\| to 108 in a channel, above 100"):
+            write({"sun": cf.NamedTable(np.full((12, 1, 3), 9.0), np.array([[3, 2]]))})
+        with pytest.raises(cf.CoefficientFileError, match="unknown table 'moon'"):
+            write({"sun": _sun(), "moon": _sun()})
+        with pytest.raises(cf.CoefficientFileError, match=r"tables\['sun'\] must be a NamedTable, got tuple"):
+            write({"sun": (_sun().table, _sun().degrees)})
+        with pytest.raises(cf.CoefficientFileError, match="tables must be a mapping of names to NamedTable, got list"):
+            write([_sun()])
+        with pytest.raises(cf.CoefficientFileError, match=r"metadata tables describes \['moon', 'sun'\]; the tables held are "
+                           r"\['sun'\]"):
+            write(good.tables, {"tables": {"sun": {"rgb_from_xyz": SRGB_FROM_XYZ}, "moon": {}}})
+        with pytest.raises(cf.CoefficientFileError, match="metadata tables must be a JSON object, got list"):
+            write(good.tables, {"tables": []})
         assert not (tmp_path / "x.npz").exists()
 
     def test_argument_types(self, tmp_path: Path) -> None:
-        with pytest.raises(cf.CoefficientFileError, match="sky_table must be a skysh.coefficient_file.SkyTable, got dict"):
+        with pytest.raises(cf.CoefficientFileError, match=r"sky_table must be a skysh.coefficient_file.SkyTable, got dict"):
             cf.write(tmp_path / "x.npz", {"table": 1})  # type: ignore[arg-type]
-        with pytest.raises(cf.CoefficientFileError, match="path must be a str or os.PathLike"):
+        with pytest.raises(cf.CoefficientFileError, match=r"path must be a str or os.PathLike"):
             cf.write(7, _small_table())  # type: ignore[arg-type]
         with pytest.raises(cf.CoefficientFileError, match="table must be a numpy array of floats, got list"):
             cf.write(tmp_path / "x.npz", cf.SkyTable(table=[[1.0]], degrees=np.zeros((1, 2), np.int64)))  # type: ignore[arg-type]
@@ -379,3 +527,69 @@ class TestWriteRefusals:
             SkySH(cf.SkyTable(table=bad.table[:, :-1], degrees=bad.degrees, metadata={}))
         with pytest.raises(cf.CoefficientFileError, match="colourspace 'Nope' is not one"):
             SkySH(cf.SkyTable(table=bad.table, degrees=bad.degrees, metadata={"colourspace": "Nope"}))
+        # In memory the sun's table is optional: a sky alone still serves the sky.
+        assert SkySH(cf.SkyTable(bad.table, bad.degrees, {})).coefficients(0.5, 3.0).shape == (9, 3)
+
+
+# --------------------------------------------------------------------------- #
+# The named-table scheme: a further table is one TableSpec
+# --------------------------------------------------------------------------- #
+IRRADIANCE = cf.TableSpec(
+    name="irradiance", required=False, groups=(3, 3),
+    fields={"basis": cf.BASIS, "domain": cf.DOMAIN, "term_order": cf.TERM_ORDER, "units": "test: radiance-equivalent"},
+    max_magnitude=cf.MAX_TABLE_MAGNITUDE,
+)
+"""A table of issue 18's kind (3 bands of the sky's form), optional, as a test declares it."""
+
+
+@pytest.fixture()
+def with_irradiance(monkeypatch: pytest.MonkeyPatch) -> pytest.MonkeyPatch:
+    """The format with IRRADIANCE added to TABLES and nothing else changed by hand (the layout derived by _layout)."""
+    tables = cf.TABLES + (IRRADIANCE,)
+    layout = cf._layout(tables)
+    for name, value in zip(("TABLES", "MEMBERS", "REQUIRED_MEMBERS", "MAX_MEMBER_BYTES", "MAX_FILE_BYTES"), (tables, *layout)):
+        monkeypatch.setattr(cf, name, value)
+    return monkeypatch
+
+
+def _with_irradiance_table(seed: int = 7) -> cf.SkyTable:
+    base = _small_table()
+    irradiance = cf.NamedTable(np.random.default_rng(seed).normal(size=(15, 6, 3)), np.full((3, 2), [4, 2]))
+    return cf.SkyTable(base.table, base.degrees, base.metadata, {**base.tables, "irradiance": irradiance})
+
+
+class TestNamedTableScheme:
+    def test_layout(self, with_irradiance: pytest.MonkeyPatch) -> None:
+        assert cf.MEMBERS[-3:] == ("irradiance_table.npy", "irradiance_degrees.npy", "metadata.npy")
+        assert "irradiance_table.npy" not in cf.REQUIRED_MEMBERS and cf.MAX_FILE_BYTES < 1 << 20
+
+    def test_round_trip_and_hash(self, tmp_path: Path, with_irradiance: pytest.MonkeyPatch) -> None:
+        path = cf.write(tmp_path / "i.npz", _with_irradiance_table())
+        back = cf.read(path)
+        np.testing.assert_array_equal(back.tables["irradiance"].table, _with_irradiance_table().tables["irradiance"].table)
+        assert back.metadata["tables"]["irradiance"]["units"] == "test: radiance-equivalent"
+        assert cf.write(tmp_path / "again.npz", back).read_bytes() == path.read_bytes()
+        with zipfile.ZipFile(path) as archive:
+            assert [i.filename for i in archive.infolist()] == list(cf.MEMBERS)
+        irradiance = back.tables["irradiance"]
+        changed = dict(back.tables, irradiance=cf.NamedTable(irradiance.table * 1.0001, irradiance.degrees))
+        assert cf.content_sha256(back.table, back.degrees, back.metadata, changed) != back.metadata[cf.HASH_KEY]
+
+    def test_optional(self, tmp_path: Path, with_irradiance: pytest.MonkeyPatch) -> None:
+        """Files without the optional table (written before it existed) still read."""
+        assert cf.read(cf.default_path()).tables.keys() == {"sun"}
+        with np.load(cf.write(tmp_path / "i.npz", _with_irradiance_table()), allow_pickle=False) as data:
+            entries = {key: data[key] for key in data.files}
+        half = {k: v for k, v in entries.items() if k != "irradiance_degrees"}
+        _refused(_write_raw(tmp_path / "h.npz", half), r"lacks the members \['irradiance_degrees.npy'\]")
+
+    def test_block_checked(self, tmp_path: Path, with_irradiance: pytest.MonkeyPatch) -> None:
+        table = _with_irradiance_table()
+        metadata = {**table.metadata, "tables": {**table.metadata["tables"], "irradiance": {"basis": "monomials"}}}
+        with pytest.raises(cf.CoefficientFileError, match=r"tables\['irradiance'\] basis 'monomials' differs"):
+            cf.write(tmp_path / "x.npz", cf.SkyTable(table.table, table.degrees, metadata, table.tables))
+
+    def test_unknown_without_the_spec(self, tmp_path: Path, with_irradiance: pytest.MonkeyPatch) -> None:
+        path = cf.write(tmp_path / "i.npz", _with_irradiance_table())
+        with_irradiance.undo()  # this skysh's format: no such table
+        _refused(path, r"holds 9 members including unexpected ones \['irradiance_degrees.npy', 'irradiance_table.npy'\]")

@@ -6,20 +6,23 @@ Every file here must be refused by :func:`skysh.coefficient_file.read` with a
 :class:`~skysh.coefficient_file.CoefficientFileError` (nothing else: no
 ``zlib.error``, ``BadZipFile``, ``KeyError``, no hang), each read within
 :data:`MEMORY_BUDGET` of peak allocation (``tracemalloc``, which numpy's
-allocations report to). Kinds (issue 13): truncations, bit flips at every 997th
-byte and at random, hostile members (extra, many, repeated, huge declared
-sizes, a 3 GiB declared table, deflate bombs with true and lying sizes),
-changed numbers (x 1.0001, one sign, one ulp), other dtypes (float16, float32,
-big-endian, Fortran order), metadata changes (with a stale hash, and with a
-recomputed hash: unknown colourspace, other domain, degrees, basis), values
-of 1e308, and special files (FIFO, /dev/urandom, /dev/null, a directory, a
-socket, symlinks to devices, a 3 GiB sparse file).
+allocations report to). Kinds (issue 13, extended to format version 3's sun
+table): truncations, bit flips at every 997th byte and at random, hostile
+members (extra, many, repeated, missing, huge declared sizes, 3 GiB declared
+tables, deflate bombs with true and lying sizes), changed numbers in the sky's
+and the sun's tables (x 1.0001, one sign, one ulp, swapped), other dtypes
+(float16, float32, big-endian, Fortran order), metadata changes (with a stale
+hash, and with a recomputed hash: unknown colourspace, other domain, degrees,
+basis; the sun's block: its variables, air-mass range, units, degrees,
+colourspace, XYZ -> RGB matrix), values of 1e308 and sun tables whose
+exponential could overflow, and special files (FIFO, /dev/urandom, /dev/null,
+a directory, a socket, symlinks to devices, a 3 GiB sparse file).
 
 Time is never asserted. Instead, boundedness is shown by construction: hostile
 files declare sizes far above what they hold, and a spy on the reader's only
-inflater (``coefficient_file._inflate``) shows that no oversize or unknown
-member is ever inflated, and a spy on ``os.open`` that no special file is
-opened (or, when ``os.stat`` is made to lie, that it is opened non-blocking).
+inflater (``skysh._npz.inflate``) shows that no oversize or unknown member is
+ever inflated, and a spy on ``os.open`` that no special file is opened (or,
+when ``os.stat`` is made to lie, that it is opened non-blocking).
 
 Files are built here with an independent zip writer (:func:`_zip`, typed from
 the zip specification) and :func:`numpy.lib.format.write_array`, never with
@@ -36,12 +39,14 @@ import socket
 import struct
 import tracemalloc
 import zlib
+from collections.abc import Iterable
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any
 
 import numpy as np
 import pytest
 
+from skysh import _npz
 from skysh import coefficient_file as cf
 
 MEMORY_BUDGET: int = 64 * 2**20
@@ -118,21 +123,31 @@ class Content:
         sky = cf.read()
         self.table = sky.table.copy()
         self.degrees = sky.degrees.copy()
+        self.sun_table = sky.tables["sun"].table.copy()
+        self.sun_degrees = sky.tables["sun"].degrees.copy()
         self.metadata = json.loads(json.dumps(sky.metadata))
 
     def members(self, rehash: bool = False, **arrays: np.ndarray) -> dict[str, bytes]:
-        """The five members (optionally with replaced arrays; the hash recomputed if ``rehash``)."""
+        """The seven members (optionally with replaced arrays; the hash recomputed if ``rehash``)."""
         table, degrees = arrays.get("table", self.table), arrays.get("degrees", self.degrees)
+        sun = cf.NamedTable(arrays.get("sun_table", self.sun_table), arrays.get("sun_degrees", self.sun_degrees))
         metadata = dict(self.metadata)
         if rehash:
-            metadata[cf.HASH_KEY] = cf.content_sha256(table, degrees, metadata)
+            metadata[cf.HASH_KEY] = cf.content_sha256(table, degrees, metadata, {"sun": sun})
         return {
             "format.npy": _npy(np.array(cf.FORMAT)),
             "format_version.npy": _npy(np.array(cf.FORMAT_VERSION, dtype=np.int64)),
             "table.npy": _npy(table),
             "degrees.npy": _npy(degrees),
+            "sun_table.npy": _npy(sun.table),
+            "sun_degrees.npy": _npy(sun.degrees),
             "metadata.npy": arrays.get("metadata_bytes", _npy(np.frombuffer(_canonical(metadata), dtype=np.uint8))),
         }
+
+    def with_sun_block(self, **changes: Any) -> dict[str, Any]:
+        """The metadata with the sun's block changed (``None`` deletes a field)."""
+        block = {k: v for k, v in {**self.metadata["tables"]["sun"], **changes}.items() if v is not None}
+        return dict(self.metadata, tables={**self.metadata["tables"], "sun": block})
 
     def file(self, rehash: bool = False, **arrays: np.ndarray) -> bytes:
         return _zip((name, payload, STORED, None) for name, payload in self.members(rehash, **arrays).items())
@@ -152,13 +167,13 @@ def shipped() -> bytes:
 def inflations(monkeypatch: pytest.MonkeyPatch) -> list[int]:
     """Declared sizes the reader inflates to (its only decompression)."""
     calls: list[int] = []
-    real = cf._inflate
+    real = _npz.inflate
 
     def spy(raw: bytes, size: int) -> bytes:
         calls.append(size)
         return real(raw, size)
 
-    monkeypatch.setattr(cf, "_inflate", spy)
+    monkeypatch.setattr(_npz, "inflate", spy)
     return calls
 
 
@@ -195,7 +210,7 @@ def _all_refused(tmp_path: Path, cases: Iterable[tuple[str, bytes]]) -> int:
                 failures.append(f"{label}: accepted")
             except cf.CoefficientFileError:
                 pass
-            except Exception as error:  # noqa: BLE001 -- the point: anything else is a failure
+            except Exception as error:
                 failures.append(f"{label}: {type(error).__name__}: {error}")
             peak = tracemalloc.get_traced_memory()[1]
             if peak >= MEMORY_BUDGET:
@@ -254,18 +269,19 @@ class TestTruncationsAndFlips:
 class TestHostileMembers:
     def test_extra_member(self, tmp_path: Path, content: Content, inflations: list[int]) -> None:
         members = [(n, p, STORED, None) for n, p in content.members().items()] + [("extra.npy", _npy(np.zeros(3)), STORED, None)]
-        _refused_bytes(tmp_path, _zip(members), r"holds 6 members including unexpected ones \['extra.npy'\]")
+        _refused_bytes(tmp_path, _zip(members), r"holds 8 members including unexpected ones \['extra.npy'\]")
         assert inflations == []
 
     def test_many_members(self, tmp_path: Path, content: Content) -> None:
         members = [(n, p, STORED, None) for n, p in content.members().items()]
         members += [(f"x{i}.npy", b"", STORED, None) for i in range(3000)]
-        _refused_bytes(tmp_path, _zip(members), "holds 3005 members including unexpected ones")
+        _refused_bytes(tmp_path, _zip(members), "holds 3007 members including unexpected ones")
 
     def test_repeated_member(self, tmp_path: Path, content: Content) -> None:
         members = [(n, p, STORED, None) for n, p in content.members().items()]
-        _refused_bytes(tmp_path, _zip(members + members[2:3]), "holds 6 members")
-        _refused_bytes(tmp_path, _zip(members[:4] + members[2:3]), r"lacks the members \['metadata.npy'\] or repeats one")
+        _refused_bytes(tmp_path, _zip(members + members[2:3]), "holds 8 members")
+        _refused_bytes(tmp_path, _zip(members[:6] + members[4:5]), r"repeats the members \['sun_table.npy'\]")
+        _refused_bytes(tmp_path, _zip(members[:4] + members[6:]), r"lacks the members \['sun_table.npy', 'sun_degrees.npy'\]")
 
     def test_huge_declared_sizes(self, tmp_path: Path, content: Content, inflations: list[int]) -> None:
         members = content.members()
@@ -275,14 +291,15 @@ class TestHostileMembers:
                 _refused_bytes(tmp_path, _zip(entries), rf"member {name} declares {declared} bytes, above .*refused unread")
         assert inflations == []
 
-    def test_three_gib_declared_table(self, tmp_path: Path, content: Content, inflations: list[int]) -> None:
+    @pytest.mark.parametrize("member", ["table.npy", "sun_table.npy"])
+    def test_three_gib_declared_table(self, tmp_path: Path, content: Content, inflations: list[int], member: str) -> None:
         members = content.members()
-        entries = [(n, _deflate(p) if n == "table.npy" else p, DEFLATED if n == "table.npy" else STORED,
-                    3 * 2**30 if n == "table.npy" else None) for n, p in members.items()]
-        _refused_bytes(tmp_path, _zip(entries), rf"member table.npy declares {3 * 2**30} bytes.*refused unread")
+        entries = [(n, _deflate(p) if n == member else p, DEFLATED if n == member else STORED,
+                    3 * 2**30 if n == member else None) for n, p in members.items()]
+        _refused_bytes(tmp_path, _zip(entries), rf"member {member} declares {3 * 2**30} bytes.*refused unread")
         assert inflations == []
 
-    @pytest.mark.parametrize("member", ["table.npy", "bomb.npy"])
+    @pytest.mark.parametrize("member", ["table.npy", "sun_table.npy", "sun_degrees.npy", "bomb.npy"])
     def test_deflate_bomb_with_true_size(self, tmp_path: Path, content: Content, inflations: list[int], member: str) -> None:
         members = content.members()
         bomb = (member, _deflated_zeros(BOMB_BYTES), DEFLATED, BOMB_BYTES)
@@ -292,7 +309,7 @@ class TestHostileMembers:
         _refused_bytes(tmp_path, _zip(entries), "declares 67108864 bytes|unexpected ones")
         assert inflations == []
 
-    @pytest.mark.parametrize("member", ["format.npy", "format_version.npy", "table.npy"])
+    @pytest.mark.parametrize("member", ["format.npy", "format_version.npy", "table.npy", "sun_table.npy"])
     def test_deflate_bomb_with_lying_size(self, tmp_path: Path, content: Content, inflations: list[int], member: str) -> None:
         """A 64 MiB stream declared within the bound: never inflated past its declared size."""
         members = content.members()
@@ -326,20 +343,33 @@ class TestHostileMembers:
 
 
 class TestChangedNumbers:
+    @pytest.mark.parametrize("entry", ["table", "sun_table"])
     @pytest.mark.parametrize(
         "change",
         [
-            pytest.param(lambda t: t.__setitem__((7, 4, 1), t[7, 4, 1] * 1.0001), id="scaled-1.0001"),
+            pytest.param(lambda t: t.__setitem__((7, 0, 1), t[7, 0, 1] * 1.0001), id="scaled-1.0001"),
             pytest.param(lambda t: t.__setitem__((0, 0, 0), -t[0, 0, 0]), id="sign-flip"),
-            pytest.param(lambda t: t.__setitem__((111, 27, 2), np.nextafter(t[111, 27, 2], np.inf)), id="one-ulp"),
+            pytest.param(lambda t: t.__setitem__((-1, -1, -1), np.nextafter(t[-1, -1, -1], np.inf)), id="one-ulp"),
             pytest.param(lambda t: t.__setitem__((slice(0, 2), 0, 0), t[[1, 0], 0, 0]), id="swapped"),
         ],
     )
-    def test_stale_hash(self, tmp_path: Path, content: Content, change) -> None:
-        table = content.table.copy()
+    def test_stale_hash(self, tmp_path: Path, content: Content, change, entry: str) -> None:
+        table = getattr(content, entry).copy()
         change(table)
-        assert not np.array_equal(table, content.table)
-        _refused_bytes(tmp_path, content.file(table=table), "content hash mismatch")
+        assert not np.array_equal(table, getattr(content, entry))
+        _refused_bytes(tmp_path, content.file(**{entry: table}), "content hash mismatch")
+
+    def test_sun_degrees_swapped(self, tmp_path: Path, content: Content) -> None:
+        """(12, 6) -> (6, 12): the same 91 terms read as another polynomial; the block updated, the hash stale."""
+        original = content.metadata
+        try:
+            content.metadata = content.with_sun_block(degrees=[[6, 12]])
+            _refused_bytes(tmp_path, content.file(sun_degrees=np.array([[6, 12]])), "content hash mismatch")
+            content.metadata = original
+            _refused_bytes(tmp_path, content.file(rehash=True, sun_degrees=np.array([[6, 12]])),
+                           r"tables\['sun'\] degrees \[\[12, 6\]\] differs from \[\[6, 12\]\]")
+        finally:
+            content.metadata = original
 
     @pytest.mark.parametrize(
         "changes",
@@ -349,10 +379,28 @@ class TestChangedNumbers:
     def test_metadata_with_stale_hash(self, tmp_path: Path, content: Content, changes: dict) -> None:
         metadata = dict(content.metadata, **changes)
         raw = _npy(np.frombuffer(_canonical(metadata), dtype=np.uint8))
+        if "colourspace" in changes:  # the sun's block names the colourspace too: refused as inconsistent first
+            _refused_bytes(tmp_path, content.file(metadata_bytes=raw), "colourspace 'sRGB' differs from")
+            metadata = dict(content.with_sun_block(**changes), **changes)  # both changed: only the hash tells
+            raw = _npy(np.frombuffer(_canonical(metadata), dtype=np.uint8))
+        _refused_bytes(tmp_path, content.file(metadata_bytes=raw), "content hash mismatch")
+
+    @pytest.mark.parametrize(
+        "changes",
+        [{"rgb_from_xyz": [[3.2404542, -1.5371385, -0.4985314], [-0.969266, 1.8760108, 0.041556],
+                           [0.0556434, -0.2040259, 1.0572252]]},  # Lindbloom's sRGB digits: plausible, not the file's
+         {"errors": {"worst": 1e-9}}, {"description": "changed"}],
+        ids=["matrix", "errors", "description"],
+    )
+    def test_sun_block_with_stale_hash(self, tmp_path: Path, content: Content, changes: dict) -> None:
+        metadata = content.with_sun_block(**changes)
+        assert metadata != content.metadata
+        raw = _npy(np.frombuffer(_canonical(metadata), dtype=np.uint8))
         _refused_bytes(tmp_path, content.file(metadata_bytes=raw), "content hash mismatch")
 
 
 class TestDtypes:
+    @pytest.mark.parametrize("entry", ["table", "sun_table"])
     @pytest.mark.parametrize(
         "convert, match",
         [
@@ -364,13 +412,14 @@ class TestDtypes:
         ],
         ids=["float16", "float32", "big-endian", "fortran", "complex"],
     )
-    def test_table_dtype(self, tmp_path: Path, content: Content, convert, match: str) -> None:
-        table = convert(content.table)
-        _refused_bytes(tmp_path, content.file(table=table), match)
+    def test_table_dtype(self, tmp_path: Path, content: Content, convert, match: str, entry: str) -> None:
+        table = convert(getattr(content, entry))
+        _refused_bytes(tmp_path, content.file(**{entry: table}), rf"{entry}.npy holds .*{match}|{entry}.npy has .*{match}")
 
+    @pytest.mark.parametrize("entry", ["degrees", "sun_degrees"])
     @pytest.mark.parametrize("dtype", [np.int32, np.float64, np.uint64])
-    def test_degrees_dtype(self, tmp_path: Path, content: Content, dtype: type) -> None:
-        _refused_bytes(tmp_path, content.file(degrees=content.degrees.astype(dtype)), "degrees.npy holds")
+    def test_degrees_dtype(self, tmp_path: Path, content: Content, dtype: type, entry: str) -> None:
+        _refused_bytes(tmp_path, content.file(**{entry: getattr(content, entry).astype(dtype)}), f"{entry}.npy holds")
 
 
 class TestMetadataChanges:
@@ -401,7 +450,55 @@ class TestMetadataChanges:
         finally:
             content.metadata = original
 
-    @pytest.mark.parametrize("field", ["colourspace", "domain", "basis", "degrees", "bands", cf.HASH_KEY])
+    @pytest.mark.parametrize(
+        "changes, match",
+        [
+            ({"air_mass_range": [1.0, 36.5]}, "air_mass_range .* differs"),
+            ({"variables": {"x": "4 sun_zenith / pi - 1", "y": "y"}}, "variables .* differs"),
+            ({"units": "lux"}, "units 'lux' differs"),
+            ({"basis": "ln XYZ in theta"}, "basis 'ln XYZ in theta' differs"),
+            ({"domain": {"sun_zenith": [0.0, 1.6], "turbidity": [2.5, 6.0]}}, r"tables\['sun'\] domain"),
+            ({"term_order": "j (d_x + 1) + i"}, "term_order .* differs"),
+            ({"degrees": [[11, 6]]}, r"degrees \[\[11, 6\]\] differs from \[\[12, 6\]\]"),
+            ({"colourspace": "ACEScg"}, "colourspace 'ACEScg' differs from 'sRGB'"),
+            ({"rgb_from_xyz": [[1, 0, 0], [0, 1, 0]]}, "rgb_from_xyz must be a 3 x 3 list of numbers"),
+            ({"rgb_from_xyz": [[1e300, 0, 0], [0, 1, 0], [0, 0, 1]]}, r"within \+-16"),
+            ({"rgb_from_xyz": [[False, 0, 0], [0, 1, 0], [0, 0, 1]]}, "rgb_from_xyz must be"),
+            ({"rgb_from_xyz": [[[1], 0, 0], [0, 1, 0], [0, 0, 1]]}, "rgb_from_xyz must be"),
+            ({"rgb_from_xyz": None}, r"tables\['sun'\] lacks the fields \['rgb_from_xyz'\]"),
+            ({"units": None}, r"tables\['sun'\] lacks the fields \['units'\]"),
+            ({"air_mass_range": None}, r"lacks the fields \['air_mass_range'\]"),
+            ({"degrees": None}, r"lacks the fields \['degrees'\]"),
+        ],
+        ids=["air-mass", "variables", "units", "basis", "domain", "term-order", "degrees", "colourspace",
+             "matrix-shape", "matrix-huge", "matrix-bool", "matrix-nested", "no-matrix", "no-units", "no-air-mass",
+             "no-degrees"],
+    )
+    def test_sun_block(self, tmp_path: Path, content: Content, changes: dict, match: str) -> None:
+        original = content.metadata
+        try:
+            content.metadata = content.with_sun_block(**changes)
+            _refused_bytes(tmp_path, content.file(rehash=True), match)
+        finally:
+            content.metadata = original
+
+    @pytest.mark.parametrize(
+        "tables, match",
+        [("sun", "metadata tables must be a JSON object"), ({}, r"metadata tables describes \[\]; the tables held are \['sun'\]"),
+         ("moon", r"metadata tables describes \['moon', 'sun'\]"), ([1], "metadata tables must be a JSON object")],
+        ids=["string", "empty", "unknown-table", "list"],
+    )
+    def test_tables_field(self, tmp_path: Path, content: Content, tables: Any, match: str) -> None:
+        original = content.metadata
+        if tables == "moon":
+            tables = {**original["tables"], "moon": original["tables"]["sun"]}
+        try:
+            content.metadata = dict(original, tables=tables)
+            _refused_bytes(tmp_path, content.file(rehash=True), match)
+        finally:
+            content.metadata = original
+
+    @pytest.mark.parametrize("field", ["colourspace", "domain", "basis", "degrees", "bands", "tables", cf.HASH_KEY])
     def test_missing_field(self, tmp_path: Path, content: Content, field: str) -> None:
         original = content.metadata
         try:
@@ -431,17 +528,34 @@ class TestMetadataChanges:
 
 
 class TestValues:
-    @pytest.mark.parametrize("value", [1e308, -1e308, 1.0001e4, np.finfo(np.float64).max], ids=["1e308", "-1e308", "bound", "max"])
+    @pytest.mark.parametrize(
+        "value", [1e308, -1e308, 1.0001e4, np.finfo(np.float64).max], ids=["1e308", "-1e308", "bound", "max"]
+    )
     def test_magnitude(self, tmp_path: Path, content: Content, value: float) -> None:
         table = content.table.copy()
         table[0, 0, 0] = value
         _refused_bytes(tmp_path, content.file(rehash=True, table=table), r"table holds \|value\| .* above 10000")
 
+    @pytest.mark.parametrize("value", [1e308, -101.0, 709.8], ids=["1e308", "-101", "exp-overflow"])
+    def test_sun_magnitude(self, tmp_path: Path, content: Content, value: float) -> None:
+        table = content.sun_table.copy()
+        table[1, 0, 2] = value
+        _refused_bytes(tmp_path, content.file(rehash=True, sun_table=table),
+                       r"sun_table holds \|value\| .* above 100 \(SUN_MAX_LN\)")
+
+    def test_sun_channel_sum(self, tmp_path: Path, content: Content) -> None:
+        """Every entry within the bound, a channel's sum beyond it: its exponential could overflow."""
+        table = content.sun_table.copy()
+        table[:, 0, 1] = 1.2  # 91 x 1.2 = 109.2
+        _refused_bytes(tmp_path, content.file(rehash=True, sun_table=table),
+                       r"sun_table sums \|values\| to 109 in a channel, above 100 \(SUN_MAX_LN\)")
+
+    @pytest.mark.parametrize("entry", ["table", "sun_table"])
     @pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf])
-    def test_non_finite(self, tmp_path: Path, content: Content, value: float) -> None:
-        table = content.table.copy()
-        table[3, 2, 1] = value
-        _refused_bytes(tmp_path, content.file(rehash=True, table=table), "NaN or inf")
+    def test_non_finite(self, tmp_path: Path, content: Content, value: float, entry: str) -> None:
+        table = getattr(content, entry).copy()
+        table[3, 0, 1] = value
+        _refused_bytes(tmp_path, content.file(rehash=True, **{entry: table}), f"{entry} holds NaN or inf")
 
 
 class TestSpecialFiles:

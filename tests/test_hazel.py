@@ -1,16 +1,18 @@
-"""Tests of skysh.hazel against definitions by quadrature, the orthonormal route and analytic irradiance."""
+"""Tests of skysh.hazel against definitions by quadrature, the orthonormal route and analytic irradiance.
+
+The study of the reconstructions on the sky (exact irradiance, comparison) is tested in tests/test_studies.py.
+"""
 
 from __future__ import annotations
 
 import math
-import sys
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from skysh import hazel, preetham, sh
+from skysh import hazel, sh
 
 ROUTE_TOLERANCE: float = 1e-13
 """Hazel's formulas against the orthonormal route: a few float64 operations on values of size ~1
@@ -25,26 +27,10 @@ GEOMERICS_MEAN_TOLERANCE: float = 1e-6
 polynomial for p = 1, 2, 3 and smooth otherwise except at q = 0, where q^p has a p-th power kink;
 the rule's error there is far below 1e-6 (measured ~1e-9)."""
 
-EXACT_TOLERANCE: float = 2e-4
-"""exact_irradiance (32 bands) against the adaptive lune quadrature, relative to the mean irradiance
-R0: the 32-band truncation error is ~3e-5 at generic normals (EXACT_BANDS docstring), the lune rule's
-own ~5e-6; 2e-4 leaves room for near-horizontal normals."""
-
-ANTIPODAL_TOLERANCE: float = 2e-5
-"""n.R1 against (I(n) - I(-n)) / 4 with I from the lune rule, relative to R0: the rule's own error is
-~5e-6 (160 against 400 nodes), the identity is exact (measured 1e-6)."""
-
 IDENTITY_TOLERANCE: float = 1e-9
 """Relative tolerance of exact algebraic identities evaluated through pow and sqrt in float64
 (I(d) - I(-d) = 4 |R1|, r = 1 for one delta light): rounding is ~1e-15, cancellation near r = 0 costs
 a few more digits."""
-
-TRUNCATION_16_BOUND: float = 1e-2
-"""Upper limit of the comparison's truncation estimate |I(16 bands) - I(8 bands)| / R0 (measured 4e-3
-for the two skies of the test): the estimate must be reported and small against the L1 errors (~0.1)."""
-
-LUNE_NODES: int = 160
-"""Gauss nodes per axis of the lune rule (160 vs 400 agree to ~1e-5 of R0)."""
 
 
 def unit(v) -> np.ndarray:
@@ -69,38 +55,6 @@ def delta_lights(draw) -> tuple[np.ndarray, np.ndarray]:
 def exact_delta_irradiance(dirs: np.ndarray, powers: np.ndarray, normals: np.ndarray) -> np.ndarray:
     """I(n) = (1 / pi) sum_j s_j max(0, n.d_j) for R = sum_j s_j delta(w - d_j): analytic, not SH."""
     return np.maximum(0.0, normals @ dirs.T) @ powers / math.pi
-
-
-def lune_irradiance(normal: np.ndarray, sun_zenith: float, turbidity: float, sun_azimuth: float) -> np.ndarray:
-    """I(n) = (1 / pi) integral over {z >= 0, n.w >= 0} of L(w) n.w dw, by product Gauss over the lune.
-
-    Both boundary great circles contain the axis a = z x n, so in spherical coordinates about a
-    (polar angle beta, azimuth alpha) the lune is a rectangle in (alpha, beta): the horizon jump and
-    the cosine kink lie on its edges, and the integrand is smooth inside but for the sun's kink.
-    """
-    z = np.array([0.0, 0.0, 1.0])
-    axis = np.cross(z, normal)
-    axis = np.array([1.0, 0.0, 0.0]) if np.linalg.norm(axis) < 1e-12 else unit(axis)
-    e1 = unit(np.cross(axis, z))  # horizontal, perpendicular to the axis
-    e2 = np.cross(axis, e1)
-    e2 = e2 if e2 @ z > 0 else -e2  # up: alpha in [0, pi] is the upper hemisphere
-    centre = math.atan2(normal @ e2, normal @ e1)
-    low, high = max(0.0, centre - math.pi / 2), min(math.pi, centre + math.pi / 2)
-    if high <= low:
-        return np.zeros(3)
-    x, w = np.polynomial.legendre.leggauss(LUNE_NODES)
-    beta = 0.5 * math.pi * (x + 1.0)
-    w_beta = 0.5 * math.pi * w * np.sin(beta)
-    alpha = low + (high - low) * 0.5 * (x + 1.0)
-    w_alpha = (high - low) * 0.5 * w
-    b, a = np.meshgrid(beta, alpha, indexing="ij")
-    around = np.cos(a)[..., None] * e1 + np.sin(a)[..., None] * e2
-    dirs = np.cos(b)[..., None] * axis + np.sin(b)[..., None] * around
-    dirs = unit(dirs.reshape(-1, 3))
-    dirs[:, 2] = np.maximum(dirs[:, 2], 0.0)  # rounding at alpha = 0, pi
-    dirs = unit(dirs)
-    weights = np.outer(w_beta, w_alpha).ravel() * np.maximum(0.0, dirs @ normal)
-    return weights @ preetham.radiance(dirs, sun_zenith, sun_azimuth, turbidity) / math.pi
 
 
 # --------------------------------------------------------------------------- #
@@ -249,7 +203,7 @@ class TestGeomerics:
     @settings(max_examples=40, deadline=None)
     @given(delta_lights())
     def test_derivation_conditions(self, lights):
-        """Never negative; mean R0; I(d) - I(-d) = 4 |R1| (module docstring, steps 1-2)."""
+        """Never negative; mean R0; I(d) - I(-d) = 4 |R1| (docs/hazel.md, steps 1-2)."""
         dirs, powers = lights
         coeffs = sh.basis(dirs, 2).T @ powers
         r0, r1, _ = hazel.to_normalised(coeffs)
@@ -308,62 +262,3 @@ class TestGeomerics:
         assert batched.shape == (5, 6, 3)
         np.testing.assert_allclose(batched[2], hazel.irradiance_l1_nonlinear(coeffs[2], normals), rtol=ROUTE_TOLERANCE)
         assert hazel.irradiance_l1_nonlinear(coeffs[0, :, 0], normals).shape == (6,)
-
-
-# --------------------------------------------------------------------------- #
-class TestSky:
-    SUN_ZENITH = 1.2
-    TURBIDITY = 2.5
-    SUN_AZIMUTH = 0.7
-
-    @pytest.fixture(scope="class")
-    def normals(self):
-        n = np.vstack([random_dirs(4, 16), [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0], unit([1.0, 0.0, 0.05])]])
-        return n
-
-    @pytest.fixture(scope="class")
-    def lune(self, normals):
-        both = np.vstack([normals, -normals])
-        return both, np.stack([lune_irradiance(n, self.SUN_ZENITH, self.TURBIDITY, self.SUN_AZIMUTH) for n in both])
-
-    def test_exact_irradiance_against_direct_quadrature(self, lune):
-        normals, direct = lune
-        got = hazel.exact_irradiance(self.SUN_ZENITH, self.TURBIDITY, normals, sun_azimuth=self.SUN_AZIMUTH)
-        r0 = preetham.sky_sh(self.SUN_ZENITH, self.TURBIDITY, bands=1)[0] * hazel.L0_SCALE
-        np.testing.assert_array_less(np.abs(got - direct) / r0, EXACT_TOLERANCE)
-        assert np.all(direct[np.argmin(normals[:, 2])] == 0.0)  # a normal straight down sees no sky
-
-    def test_antipodal_identity_on_the_sky(self, normals, lune):
-        both, direct = lune
-        k = normals.shape[0]
-        c = preetham.sky_sh(self.SUN_ZENITH, self.TURBIDITY, bands=2, sun_azimuth=self.SUN_AZIMUTH)
-        r0, r1, _ = hazel.to_normalised(c)
-        lhs = np.einsum("mi,ci->mc", normals, r1)
-        np.testing.assert_allclose(lhs, (direct[:k] - direct[k:]) / 4, atol=ANTIPODAL_TOLERANCE * r0.max())
-
-    def test_comparison(self):
-        result = hazel.irradiance_comparison([0.3, 1.4], [2.5, 6.0], [0.0, 1.0], exact_bands=16, n_theta=8)
-        rows = {row["method"]: row for row in result["rows"]}
-        assert set(rows) >= {"L1 linear", "L1 non-linear (Geomerics)", "L2"}
-        nonlinear = rows["L1 non-linear (Geomerics)"]
-        assert nonlinear["min"] >= 0.0 and nonlinear["negative_area"] == 0.0
-        assert rows["L2"]["rms"] < rows["L1 linear"]["rms"]
-        if "L2 deringed" in rows:  # skysh.dering is written concurrently: its row may be skipped
-            assert rows["L2 deringed"]["min"] >= 0.0 and rows["L2 deringed"]["negative_area"] == 0.0
-        else:
-            assert any("skipped" in note for note in result["notes"])
-        assert result["points"] == 2 and result["normals"] == 128 and result["truncation"] < TRUNCATION_16_BOUND
-        with pytest.raises(ValueError, match="exact_bands"):
-            hazel.irradiance_comparison(0.3, 2.5, exact_bands=4)
-        with pytest.raises(ValueError, match="sun_zenith must lie in"):
-            hazel.irradiance_comparison(2.0, 2.5, exact_bands=10, n_theta=4)
-
-    def test_comparison_skips_dering_when_it_is_missing(self, monkeypatch):
-        import skysh
-
-        monkeypatch.setitem(sys.modules, "skysh.dering", None)  # as before skysh/dering.py existed
-        if "dering" in vars(skysh):  # an earlier import binds the submodule on the package
-            monkeypatch.delattr(skysh, "dering")
-        result = hazel.irradiance_comparison(0.5, 3.0, exact_bands=10, n_theta=4)
-        assert [row["method"] for row in result["rows"]] == ["L1 linear", "L1 non-linear (Geomerics)", "L2"]
-        assert any("L2 deringed skipped" in note for note in result["notes"])

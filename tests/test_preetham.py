@@ -14,7 +14,11 @@ tests; every tolerance is a named constant with the reason for its size.
 
 from __future__ import annotations
 
+import itertools
 import math
+import subprocess
+import sys
+from pathlib import Path
 
 import colour
 import numpy as np
@@ -491,7 +495,7 @@ class TestSkySh:
         # the reference's own accuracy, and the default is below the requirement.
         reference = converged_sky_sh[sun]
         errors = [dc_relative_error(preetham.sky_sh(*sun, n=4 * k * k), reference) for k in (7, 10, 14, 20, 28, 40)]
-        for earlier, later in zip(errors, errors[1:]):
+        for earlier, later in itertools.pairwise(errors):
             assert later < earlier or max(earlier, later) < REFERENCE_FLOOR, errors
         assert errors[0] > 100 * SKY_SH_DC_RTOL  # the coarse rule really is coarse: the test can fail
         assert dc_relative_error(preetham.sky_sh(*sun), reference) < min(errors[:3])
@@ -560,3 +564,36 @@ class TestSkySh:
         kwargs.update(changes)
         with pytest.raises(ValueError, match=name):
             preetham.sky_sh(**kwargs)
+
+
+class TestQuietWithoutMatplotlib:
+    """A plain install has colour-science without matplotlib; skysh hides colour's warning about it."""
+
+    SCRIPT = "import sys; sys.modules['matplotlib'] = None\n"  # import matplotlib now fails, as on a fresh machine
+
+    def run(self, code: str) -> subprocess.CompletedProcess:
+        root = Path(__file__).resolve().parent.parent
+        return subprocess.run([sys.executable, "-W", "default", "-c", self.SCRIPT + code], capture_output=True,
+                              text=True, cwd=root)
+
+    def test_sky_sh_is_quiet(self) -> None:
+        result = self.run("from skysh import preetham; preetham.sky_sh(0.5, 3.0, bands=2)")
+        assert result.returncode == 0 and result.stderr == "", result.stderr
+
+    def test_other_colour_warnings_still_show(self) -> None:
+        """The filter is exactly that warning: colour's import under the shim warns without skysh (control),
+        and a warning skysh does not filter still reaches the user after skysh imported colour."""
+        control = self.run("import colour")
+        assert '"Matplotlib" related API features are not available' in control.stderr
+        other = self.run(
+            "from skysh import preetham; preetham.rgb_from_xyz_matrix('sRGB')\n"
+            "import warnings; warnings.warn('a different warning', UserWarning)"
+        )
+        assert "a different warning" in other.stderr and "Matplotlib" not in other.stderr
+
+    def test_numpy_print_options_are_left_alone(self) -> None:
+        """colour-science's import sets numpy's legacy print mode (control); skysh's import of it does not."""
+        code = "import numpy as np\n{}\nprint(np.get_printoptions()['legacy'])"
+        assert self.run(code.format("import colour")).stdout.strip() == "1.13"
+        result = self.run(code.format("from skysh import preetham; preetham.rgb_from_xyz_matrix('sRGB')"))
+        assert result.stdout.strip() == "False", result.stderr

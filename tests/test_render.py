@@ -15,7 +15,20 @@ import numpy as np
 import pytest
 
 from skysh import SkySH, cli
-from skysh.render import GLYPH_HEIGHT, GLYPH_WIDTH, _FONT, draw_text, latlong_dirs, render_image, tone_map, write_png
+from skysh.render import (
+    _FONT,
+    _MUTED,
+    _SUN_RING,
+    DEFAULT_PANEL_WIDTH,
+    GLYPH_HEIGHT,
+    GLYPH_WIDTH,
+    _layout,
+    draw_text,
+    latlong_dirs,
+    render_image,
+    tone_map,
+    write_png,
+)
 
 
 def read_png(path: Path) -> np.ndarray:
@@ -55,7 +68,9 @@ class TestWritePng:
         back = mpimg.imread(write_png(tmp_path / "b.png", image))
         np.testing.assert_array_equal(np.rint(back * 255).astype(np.uint8), image)
 
-    @pytest.mark.parametrize("bad", [np.zeros((4, 4)), np.zeros((4, 4, 4), np.uint8), np.full((2, 2, 3), 300), np.zeros((0, 3, 3), np.uint8)])
+    @pytest.mark.parametrize(
+        "bad", [np.zeros((4, 4)), np.zeros((4, 4, 4), np.uint8), np.full((2, 2, 3), 300), np.zeros((0, 3, 3), np.uint8)]
+    )
     def test_refuses_bad_images(self, bad: np.ndarray, tmp_path: Path) -> None:
         with pytest.raises(ValueError):
             write_png(tmp_path / "c.png", bad)
@@ -91,6 +106,14 @@ class TestFont:
         assert not blank.any()
 
 
+def inked_width(text: str, scale: int) -> int:
+    """Columns from the first to the last drawn pixel of ``text`` drawn alone by draw_text."""
+    canvas = np.zeros((GLYPH_HEIGHT * scale, len(text) * (GLYPH_WIDTH + 1) * scale, 3), np.uint8)
+    draw_text(canvas, text, 0, 0, scale)
+    columns = np.flatnonzero(canvas.any(axis=(0, 2)))
+    return int(columns.max() - columns.min() + 1)
+
+
 class TestRenderImage:
     def test_layout_and_content(self, sky: SkySH) -> None:
         width = 64
@@ -99,19 +122,55 @@ class TestRenderImage:
         dirs = latlong_dirs(width)
         assert dirs.shape == (width // 2, width, 3)
         np.testing.assert_allclose(np.linalg.norm(dirs, axis=-1), 1.0, atol=1e-12)
-        # find the first panel: the block of rows where the left panel's pixels are not background
-        background = image[0, 0]
-        differs = np.any(image != background, axis=-1)
-        assert differs.any()
-        # the true sky (first panel) is black below the horizon, not above it
-        margin, gap = 4, 6  # scale 1 for width 64
-        top = margin + 2 * (GLYPH_HEIGHT + 3)
-        panel = image[top : top + width // 2, margin : margin + width]
+        title = "SUN ZENITH 50.0 DEG, AZIMUTH 30.0 DEG, TURBIDITY 3, 3 BANDS"
+        layout = _layout(width, title)
+        assert image.shape[:2] == layout.size
+        top, height = layout.top, layout.height
+        # the true sky (first panel) is black below the horizon, not above it (the sun's ring aside)
+        panel = image[top : top + height, layout.lefts[0] : layout.lefts[0] + width]
         upper, lower = panel[: width // 4 - 1], panel[width // 4 + 1 :]
         assert upper.mean() > 40 and lower.max() == 0
         # the SH reconstruction is not zero below the horizon (ringing: the sky's jump at the horizon)
-        sh_panel = image[top : top + width // 2, margin + width + gap : margin + 2 * width + gap]
+        sh_panel = image[top : top + height, layout.lefts[1] : layout.lefts[1] + width]
         assert sh_panel[width // 4 + 1 :].max() > 0
+
+    def test_default_is_large_enough_to_read(self, sky: SkySH) -> None:
+        image = render_image(sky, 0.5, 3.0)
+        assert image.shape[1] >= 1600 and image.shape[0] >= 300
+        assert _layout(DEFAULT_PANEL_WIDTH, "").detailed and _layout(DEFAULT_PANEL_WIDTH, "").scale >= 2
+
+    @pytest.mark.parametrize("zenith_deg", [0.0, 2.0, 5.0])
+    def test_a_high_sun_keeps_its_whole_ring(self, sky: SkySH, zenith_deg: float) -> None:
+        """The ring leaves the panel above the zenith row instead of being clipped (issue 13)."""
+        width = 256
+        image = render_image(sky, math.radians(zenith_deg), 3.0, 0.0, width=width)
+        layout = _layout(width, "")
+        x0 = layout.lefts[0]
+        ring = np.all(image == _SUN_RING, axis=-1)
+        rows = np.flatnonzero(ring[:, x0 : x0 + width].any(axis=1))
+        sun_row = layout.top + math.radians(zenith_deg) / math.pi * layout.height
+        assert rows.min() < layout.top  # drawn above the panel's first row
+        assert rows.min() <= sun_row - layout.radius + 1 and rows.max() >= sun_row + layout.radius - 1
+        # the inside of the ring is the sky, untouched: the glow around the sun shows
+        centre = image[round(sun_row), x0 + width // 2]
+        assert not np.array_equal(centre, _SUN_RING) and centre.mean() > 60
+
+    def test_axes_are_labelled(self, sky: SkySH) -> None:
+        """Both axis names are drawn at full length, tick numbers for both axes in grey."""
+        width = 256
+        image = render_image(sky, 0.5, 3.0, 0.0, width=width)
+        layout = _layout(width, "")
+        k = layout.scale
+        text = np.all(image == (235, 235, 235), axis=-1)
+        below = layout.top + layout.height + int(layout.radius) + 2 * k
+        line = (GLYPH_HEIGHT + 4) * k
+        columns = np.flatnonzero(text[below + line : below + line + GLYPH_HEIGHT * k].any(axis=0))
+        assert columns.max() - columns.min() + 1 == inked_width("AZIMUTH (DEG), FROM +X TOWARDS +Y", k)
+        rows = np.flatnonzero(text[layout.top : layout.top + layout.height, : layout.lefts[0]].any(axis=1))
+        assert rows.max() - rows.min() + 1 == inked_width("ELEVATION (DEG)", k)  # drawn upwards: down the rows
+        grey = np.all(image == _MUTED, axis=-1)
+        assert grey[below : below + GLYPH_HEIGHT * k].any()  # azimuth numbers
+        assert grey[layout.top : layout.top + layout.height, : layout.lefts[0] - 3 * k].any()  # elevation numbers
 
     def test_checks(self, sky: SkySH) -> None:
         with pytest.raises(ValueError):
@@ -129,3 +188,67 @@ class TestRenderCommand:
         image = read_png(out)
         assert image.shape[1] > 3 * 32 and image.shape[0] > 16
         assert "wrote" in capsys.readouterr().out
+
+
+def test_command_line_default_is_the_library_default() -> None:
+    from skysh.render import DEFAULT_PANEL_WIDTH as library
+
+    assert cli.DEFAULT_RENDER_WIDTH == library  # the CLI repeats it so that its parser imports nothing
+
+
+class TestSunAndGround:
+    """The true scene with the sun's disk and a Lambertian ground (issue 15), and its panels."""
+
+    GROUND_RTOL: float = 1e-12
+    """true_scene's ground vs albedo x E_h / pi typed here from the same converged projection: one
+    product and a division, a few eps."""
+
+    ENERGY_RTOL: float = 1e-12
+    """The sun's pixels hold its illuminance: sum of radiance x pixel solid angle over the disk's
+    pixels vs solar.illuminance_rgb; a sum of a few values, rounding only (the sky under the disk is
+    added too and is ~1e-5 of the sun's radiance there, so it is subtracted first)."""
+
+    def test_true_scene_ground_and_sun(self, sky: SkySH) -> None:
+        from skysh import preetham, solar
+        from skysh.render import _sun_pixels, true_scene
+
+        ts, t, phi, albedo = math.radians(50), 3.0, 0.4, np.array([0.3, 0.2, 0.1])
+        dirs = latlong_dirs(64)
+        sin_theta = np.sin(np.arccos(np.clip(dirs[..., 2], -1, 1)))
+        pixel = sin_theta * (math.pi / 32) * (2 * math.pi / 64)
+        disk = _sun_pixels(dirs, ts, phi)
+        scene = true_scene(dirs, ts, t, phi, sun=True, ground_albedo=albedo, sun_pixels=disk, pixel_solid_angle=pixel)
+        e_sun = solar.illuminance_rgb(ts, t)
+        e_h = math.sqrt(4 * math.pi / 3) * preetham.sky_sh(ts, t, 2)[2] + e_sun * math.cos(ts)
+        below = dirs[..., 2] < 0
+        np.testing.assert_allclose(scene[below], np.broadcast_to(albedo * e_h / math.pi, scene[below].shape),
+                                   rtol=self.GROUND_RTOL)
+        sky_only = preetham.radiance(dirs, ts, phi, t)
+        energy = ((scene - sky_only)[disk] * pixel[disk][:, None]).sum(axis=0)
+        np.testing.assert_allclose(energy, e_sun, rtol=self.ENERGY_RTOL)
+        assert disk.sum() >= 1
+        np.testing.assert_array_equal(scene[~disk & ~below], sky_only[~disk & ~below])
+
+    def test_panels(self, sky: SkySH) -> None:
+        width = 64
+        image = render_image(sky, math.radians(50), 3.0, math.radians(30), width=width, sun=True, ground_albedo=0.3)
+        plain = render_image(sky, math.radians(50), 3.0, math.radians(30), width=width)
+        layout = _layout(width, "SUN ZENITH 50.0 DEG, AZIMUTH 30.0 DEG, TURBIDITY 3, 3 BANDS, SUN, GROUND ALBEDO 0.3")
+        assert image.shape[:2] == layout.size
+        top, height, x0 = layout.top, layout.height, layout.lefts[0]
+        truth = image[top : top + height, x0 : x0 + width]
+        lower = truth[width // 4 + 1 :]
+        assert lower.min() > 0 and np.all(lower == lower[0, 0])  # a uniform, lit ground
+        old = _layout(width, "SUN ZENITH 50.0 DEG, AZIMUTH 30.0 DEG, TURBIDITY 3, 3 BANDS")
+        assert plain[old.top + width // 4 + 1 : old.top + height, x0 : x0 + width].max() == 0  # black without it
+        from skysh.render import _sun_pixels
+
+        disk = _sun_pixels(latlong_dirs(width), math.radians(50), math.radians(30))
+        assert truth[disk].max(axis=-1).min() == 255 and truth[disk].min() > 150  # the sun, saturated
+        assert plain[old.top : old.top + height, x0 : x0 + width][disk].max() < 255  # the sky alone there
+
+    def test_checks(self, sky: SkySH) -> None:
+        with pytest.raises(TypeError, match="sun"):
+            render_image(sky, 0.5, 3.0, width=32, sun=1)
+        with pytest.raises(ValueError, match="ground_albedo"):
+            render_image(sky, 0.5, 3.0, width=32, ground_albedo=2.0)

@@ -284,7 +284,8 @@ class TestBatch:
         _close(sky.coefficients(0, 6, 0, bands=3), sky.coefficients(0.0, 6.0, 0.0, bands=3), PATH_RTOL)
 
     def test_numpy_integer_bands(self, sky: SkySH) -> None:
-        np.testing.assert_array_equal(sky.coefficients(0.5, 3.0, 1.0, bands=np.int64(3)), sky.coefficients(0.5, 3.0, 1.0, bands=3))
+        by_numpy_int = sky.coefficients(0.5, 3.0, 1.0, bands=np.int64(3))
+        np.testing.assert_array_equal(by_numpy_int, sky.coefficients(0.5, 3.0, 1.0, bands=3))
 
     def test_empty_batch(self, sky: SkySH) -> None:
         assert sky.coefficients(np.zeros(0), 3.0, bands=3).shape == (0, 9, 3)

@@ -4,9 +4,10 @@ Fit the Preetham sky's SH coefficients and write the coefficient file.
 
 Projects the sky over a (sun zenith, turbidity) grid (in parallel, with a
 progress bar), fits every coefficient with a 2D Chebyshev polynomial by
-weighted least squares (skysh.fit), measures the fit on held-out points and
-writes a versioned file (skysh.coefficient_file). The logic lives in the
-package; this is the command line.
+weighted least squares (skysh.fit), fits the sun's direct illuminance
+(skysh.solar) as ln XYZ in the same run (skysh.fit.build_sun), measures both
+on held-out points and writes a versioned file (skysh.coefficient_file, format
+version 3). The logic lives in the package; this is the command line.
 
     python tools/fit_sky.py --quick --out /tmp/q.npz
     python tools/fit_sky.py --tolerance 1e-3 --out /tmp/small.npz
@@ -42,15 +43,17 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import skysh  # noqa: E402
-from skysh import coefficient_file, fit, sh  # noqa: E402
+from skysh import coefficient_file, fit, sh, sunlight  # noqa: E402
 from skysh._version import __version__  # noqa: E402
 
 QUICK_GRID = (16, 8)
 QUICK_HELD_OUT = 24
-MAX_GRID_NODES: int = 256
-"""Largest --grid in either variable (256 x 256 projections already take hours)."""
+MAX_GRID_NODES: int = fit.MAX_GRID_NODES
+"""Largest --grid in either variable (skysh.fit's bound)."""
 MAX_JOBS: int = 256
 """Largest --jobs."""
+SUN_GOAL: float = 1e-4
+"""Issue 15's goal for the sun table: worst held-out relative error (skysh.fit.SUN_ERROR_DEFINITION)."""
 MAX_SAMPLES: int = 1_000_000
 """Largest --samples: a projection holds about 55 floats per sample at 7 bands (440 MB at the bound) per worker."""
 
@@ -86,7 +89,9 @@ def git_commit() -> str:
     """The repository's HEAD (with '+dirty' when the work tree differs), or 'unknown'."""
     try:
         head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True, check=True).stdout.strip()
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=ROOT, capture_output=True, text=True).stdout.strip()
+        dirty = subprocess.run(
+            ["git", "status", "--porcelain", "--untracked-files=no"], cwd=ROOT, capture_output=True, text=True
+        ).stdout.strip()
         return head + ("+dirty" if dirty else "")
     except (OSError, subprocess.CalledProcessError):
         return "unknown"
@@ -116,8 +121,9 @@ def check_arguments(parser: argparse.ArgumentParser, args: argparse.Namespace) -
     if args.colourspace not in coefficient_file.FILE_COLOURSPACES:
         parser.error(f"--colourspace must be one of: {', '.join(coefficient_file.FILE_COLOURSPACES)}; got {args.colourspace!r}")
     top = coefficient_file.MAX_FILE_DEGREE
-    if max(args.degrees) > top:
-        parser.error(f"--degrees must be at most {top},{top} (coefficient_file.MAX_FILE_DEGREE), got {args.degrees[0]},{args.degrees[1]}")
+    for flag, pair in (("--degrees", args.degrees), ("--sun-degrees", args.sun_degrees)):
+        if max(pair) > top:
+            parser.error(f"{flag} must be at most {top},{top} (coefficient_file.MAX_FILE_DEGREE), got {pair[0]},{pair[1]}")
     if args.grid is not None and not all(1 <= n <= MAX_GRID_NODES for n in args.grid):
         parser.error(f"--grid must be two integers in [1, {MAX_GRID_NODES}], got {args.grid[0]},{args.grid[1]}")
     if args.samples is not None and not 1 <= args.samples <= MAX_SAMPLES:
@@ -128,20 +134,46 @@ def check_arguments(parser: argparse.ArgumentParser, args: argparse.Namespace) -
         parser.error(f"--jobs must be an integer in [1, {MAX_JOBS}], got {args.jobs}")
 
 
+def print_sun(sky_table: coefficient_file.SkyTable) -> None:
+    """The sun table's held-out errors, as recorded in the file's metadata (tables.sun)."""
+    block = sky_table.metadata.get("tables", {}).get("sun")
+    if block is None or "errors" not in block:
+        return
+    errors = block["errors"]
+    print(f"\nsun table (ln XYZ, degrees {block['degrees'][0]}, condition number {block['condition_number']:.3g}, largest "
+          f"channel sum of |coefficients| {block['largest_abs_sum']:.3g}, file bound {sunlight.SUN_MAX_LN:g}): held-out "
+          f"errors on {errors['held_out_points']} points ({block['held_out']['kinds']})")
+    print(f"definition: {errors['definition']}")
+    print("| sun table | X | Y | Z | R | G | B | worst | goal |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    cells = " | ".join(f"{v:.2e}" for v in errors["xyz_relative_worst"] + errors["rgb_relative_worst"])
+    met = "met" if errors["worst"] <= SUN_GOAL else "NOT met"
+    print(f"| worst relative error | {cells} | {errors['worst']:.2e} at {errors['worst_at']} | <= {SUN_GOAL:g}: {met} |")
+    print(json.dumps({"fit": "sun", "degrees": block["degrees"], **errors}))
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = OneLineParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--out", type=Path, default=None, help="output .npz (required; the shipped file only with --force)")
     parser.add_argument("--force", action="store_true", help="allow --out to name the shipped data/preetham_sh.npz")
     parser.add_argument("--bands", type=int, default=7, choices=range(1, 8), metavar="{1..7}", help="SH bands to fit (default 7)")
-    parser.add_argument("--degrees", type=parse_pair, default=(13, 7), help="polynomial degrees 'd_theta,d_tau' (default 13,7); the upper limit with --tolerance")
+    parser.add_argument("--degrees", type=parse_pair, default=(13, 7), help="polynomial degrees 'd_theta,d_tau' (default 13,7); "
+                        "the upper limit with --tolerance")
+    parser.add_argument("--sun-degrees", type=parse_pair, default=(12, 6), help="degrees 'd_x,d_y' of the sun table (default "
+                        "12,6)")
     parser.add_argument("--grid", type=parse_pair, default=None, help="grid nodes 'n_theta,n_tau' (default 48,24; --quick 16,8)")
-    parser.add_argument("--colourspace", default="sRGB", help=f"RGB colourspace, one of: {', '.join(coefficient_file.FILE_COLOURSPACES)} (default sRGB)")
-    parser.add_argument("--method", default="quadrature", choices=sh.PROJECTION_METHODS, help="projection method (default: the sun-adapted quadrature)")
+    parser.add_argument("--colourspace", default="sRGB", help="RGB colourspace, one of: "
+                        f"{', '.join(coefficient_file.FILE_COLOURSPACES)} (default sRGB)")
+    parser.add_argument("--method", default="quadrature", choices=sh.PROJECTION_METHODS, help="projection method (default: the "
+                        "sun-adapted quadrature)")
     parser.add_argument("--samples", type=int, default=None, help="samples per projection (default: the method's default)")
-    parser.add_argument("--tolerance", type=float, default=None, help="choose the smallest degrees per band whose worst validation E_mean stays within this fraction (e.g. 1e-3)")
-    parser.add_argument("--quick", action="store_true", help=f"tiny grid {QUICK_GRID} and {QUICK_HELD_OUT} held-out points (for tests)")
+    parser.add_argument("--tolerance", type=float, default=None, help="choose the smallest degrees per band whose worst "
+                        "validation E_mean stays within this fraction (e.g. 1e-3)")
+    parser.add_argument("--quick", action="store_true", help=f"tiny grid {QUICK_GRID} and {QUICK_HELD_OUT} held-out points (for "
+                        "tests)")
     parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="worker processes (default: all cores)")
-    parser.add_argument("--compare-scalings", action="store_true", help="also print the held-out error of the fit's variable and scale choices")
+    parser.add_argument("--compare-scalings", action="store_true", help="also print the held-out error of the fit's variable and "
+                        "scale choices")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     args = parser.parse_args(argv)
     check_arguments(parser, args)
@@ -149,7 +181,7 @@ def main(argv: list[str] | None = None) -> int:
     settings = fit.FitSettings(
         bands=args.bands, degrees=args.degrees, grid=grid, colourspace=args.colourspace, method=args.method,
         samples=args.samples, held_out=QUICK_HELD_OUT if args.quick else 256,
-        validation=16 if args.quick else 128,
+        validation=16 if args.quick else 128, sun_degrees=args.sun_degrees,
     )
 
     from tqdm import tqdm
@@ -176,21 +208,25 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, OSError) as error:  # CoefficientFileError is a ValueError; an unwritable --out
         parser.error(f"cannot write --out {args.out}: {error}")
     elapsed = time.perf_counter() - start
-    print(f"wrote {path} ({path.stat().st_size / 1024:.1f} KiB) in {elapsed:.1f} s; degrees per band {sky_table.degrees.tolist()}, "
+    print(f"wrote {path} ({path.stat().st_size / 1024:.1f} KiB) in {elapsed:.1f} s; "
+          f"degrees per band {sky_table.degrees.tolist()}, "
           f"condition number {sky_table.metadata['condition_number']:.3g}, largest |table value| "
           f"{float(abs(sky_table.table).max()):.3g} (file bound {coefficient_file.MAX_TABLE_MAGNITUDE:g})")
     print(f"held-out errors ({report['held_out_points']} points incl. the 4 corners; fractions of L_min, worst channel):")
     print("| bands | worst E_mean (eq. 3) | mean E_mean | worst E_max (eq. 2) | worst DC error |")
     print("|---|---|---|---|---|")
     for bands, row in report["by_bands"].items():
-        print(f"| {bands} | {row['e_mean_worst']:.2e} | {row['e_mean_mean']:.2e} | {row['e_max_worst']:.2e} | {row['dc_worst']:.2e} |")
+        print(f"| {bands} | {row['e_mean_worst']:.2e} | {row['e_mean_mean']:.2e} | {row['e_max_worst']:.2e} | "
+              f"{row['dc_worst']:.2e} |")
     print(json.dumps({"fit": "summary", "elapsed_s": elapsed, "degrees": sky_table.degrees.tolist(), **report}))
+    print_sun(sky_table)
     if args.compare_scalings:
         print("\nform of the fit (same projections, same held-out points):")
-        print("| form | condition | worst E_mean 3 bands | worst E_mean %d bands |" % args.bands)
+        print(f"| form | condition | worst E_mean 3 bands | worst E_mean {args.bands} bands |")
         print("|---|---|---|---|")
         for row in fit.compare_variants(samples, args.degrees, args.bands):
-            print(f"| {row['variant']} | {row['condition']:.3g} | {row[f'e_mean_worst_{min(3, args.bands)}']:.2e} | {row[f'e_mean_worst_{args.bands}']:.2e} |")
+            print(f"| {row['variant']} | {row['condition']:.3g} | {row[f'e_mean_worst_{min(3, args.bands)}']:.2e} | "
+                  f"{row[f'e_mean_worst_{args.bands}']:.2e} |")
             print(json.dumps({"fit": "variant", **row}))
     return 0
 

@@ -1,32 +1,32 @@
 """
-The quantization and irradiance-reconstruction experiments on sky data
-======================================================================
+The quantization and irradiance-reconstruction studies on sky data
+==================================================================
 
-Two experiments over many (sun zenith, sun azimuth, turbidity) points of the
-fitted domain (sun zenith [0, 90] deg, azimuth [0, 360) deg, turbidity [2.5, 6]):
+Two studies over many (sun zenith, sun azimuth, turbidity) points of the fitted
+domain (:mod:`studies.sky`):
 
 1.  The Table 3 of Wiederien and Sloan (2024) on sky data
-    (:func:`skysh.quantize.table3_experiment`): L1, L2 and RMSE of the
+    (:func:`studies.quantize_study.table3_experiment`): L1, L2 and RMSE of the
     reconstructed radiance and irradiance after 8-bit compression with the
     prior bound sqrt(5) and the tight bound sqrt(15)/2, with and without the
-    square root, and the relative change.
+    square root, and the relative change; then how much the L1 column moves at
+    twice the quadrature nodes (:func:`studies.quantize_study.l1_rule_check`).
 2.  Irradiance reconstructions against the sky's exact irradiance
-    (:func:`skysh.hazel.irradiance_experiment`): linear L1, Geomerics'
-    non-linear L1, L2 and deringed L2 (skipped with a note until
-    ``skysh.dering`` exists), with the hand-counted shader cost and a numpy
-    throughput measured here (``time.perf_counter``, best of 5 after a warm-up;
-    a CPU figure, not a GPU one).
+    (:func:`studies.hazel_study.irradiance_experiment`): linear L1, Geomerics'
+    non-linear L1, L2 and deringed L2, with the hand-counted shader cost, the
+    exact irradiance's truncation estimate and a numpy throughput measured here
+    (``time.perf_counter``, best of 5 after a warm-up; a CPU figure, not a GPU one).
 
 Prints markdown tables, then one JSON line per table row.
 
 Run::
 
-    PYTHONPATH=. python tools/quantize_experiment.py --quick
-    PYTHONPATH=. python tools/quantize_experiment.py            # 1024 + 64 points
+    python tools/quantize_experiment.py --quick
+    python tools/quantize_experiment.py            # 1024 + 64 points
 
-Sky data for (1) come from ``skysh.SkySH`` when it can be imported and loaded,
-else from the reference projection ``skysh.preetham.sky_sh`` (the output says
-which); (2) always uses the reference projection at 32 bands.
+Sky data for (1) come from the source named by ``--source`` (default: the shipped
+runtime ``skysh.SkySH``; ``reference``: ``skysh.preetham.sky_sh``); (2) always uses
+the reference projection at 32 bands.
 """
 
 from __future__ import annotations
@@ -36,11 +36,16 @@ import json
 import math
 import sys
 import time
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
+from studies import hazel_study, quantize_study, sky
 
 from skysh import hazel, quantize
+
+RULE_CHECK_POINTS: int = 64
+"""Sky points of the L1 quadrature check (the doubled rule costs four times the Table 3 rule)."""
 
 QUICK_POINTS: tuple[int, int] = (64, 8)
 """Sky points of (Table 3, irradiance comparison) with --quick."""
@@ -139,8 +144,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--hazel-points", type=int, help="sky points of the irradiance comparison")
     parser.add_argument("--seed", type=int, default=0, help="seed of the sky points (default 0)")
     parser.add_argument("--bits", type=int, default=quantize.DEFAULT_BITS, help="bits per coefficient (default 8)")
-    parser.add_argument("--source", choices=quantize.SKY_SOURCES, default="auto", help="sky data of Table 3")
-    parser.add_argument("--exact-bands", type=int, default=hazel.EXACT_BANDS, help="bands of the exact irradiance")
+    parser.add_argument("--source", choices=sky.SKY_SOURCES, default="runtime",
+                        help="sky data of Table 3 (default: runtime)")
+    parser.add_argument("--exact-bands", type=int, default=hazel_study.EXACT_BANDS,
+                        help="bands of the exact irradiance")
     parser.add_argument("--only", choices=("table3", "hazel"), help="run one experiment")
     args = parser.parse_args(argv)
     default = QUICK_POINTS if args.quick else FULL_POINTS
@@ -150,15 +157,20 @@ def main(argv: list[str] | None = None) -> int:
     records: list[dict[str, Any]] = []
     if args.only in (None, "table3"):
         start = time.perf_counter()
-        result = quantize.table3_experiment(points, seed=args.seed, bits=args.bits, source=args.source)
+        result = quantize_study.table3_experiment(points, seed=args.seed, bits=args.bits, source=args.source)
         print(f"## Table 3 on sky data ({time.perf_counter() - start:.1f} s)")
         print(table3_markdown(result))
+        rule = quantize_study.l1_rule_check(min(points, RULE_CHECK_POINTS), seed=args.seed, bits=args.bits,
+                                            source=args.source)
+        print(f"\nL1 quadrature check ({min(points, RULE_CHECK_POINTS)} points): max |L1({quantize.TABLE3_THETA_NODES}"
+              f" nodes) - L1({2 * quantize.TABLE3_THETA_NODES} nodes)| / L1 = {rule:.2e}")
         common = {"source": result["source"], "points": points, "seed": args.seed, "bits": result["bits"]}
         records += [{"experiment": "table3", **common, **row} for row in result["rows"]]
         records += [{"experiment": "table3_change", **common, **change} for change in result["changes"]]
+        records.append({"experiment": "table3_l1_rule", **common, "l1_rule_change": rule})
     if args.only in (None, "hazel"):
         start = time.perf_counter()
-        result = hazel.irradiance_experiment(hazel_points, seed=args.seed, exact_bands=args.exact_bands)
+        result = hazel_study.irradiance_experiment(hazel_points, seed=args.seed, exact_bands=args.exact_bands)
         timings = reconstruction_timings(args.seed)
         print(f"\n## Irradiance reconstructions ({time.perf_counter() - start:.1f} s)")
         print(hazel_markdown(result, timings))

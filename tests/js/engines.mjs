@@ -128,7 +128,7 @@ function runBabylon(job) {
   return result;
 }
 
-// skysh's real SH with the Condon-Shortley phase, l <= 2 (CONVENTIONS.md table), at a unit vector.
+// skysh's real SH with the Condon-Shortley phase, l <= 2 (docs/conventions.md table), at a unit vector.
 const K = [0.5, -Math.sqrt(3) / 2, Math.sqrt(3) / 2, -Math.sqrt(3) / 2, Math.sqrt(15) / 2, -Math.sqrt(15) / 2,
   Math.sqrt(5) / 4, -Math.sqrt(15) / 2, Math.sqrt(15) / 4].map((k) => k / Math.sqrt(Math.PI));
 function skyshBasis(x, y, z) {

@@ -1,0 +1,364 @@
+"""
+The sun's light per frame, from the coefficient file's sun table
+================================================================
+
+The sun's direct normal illuminance of Preetham, Shirley and Smits (1999,
+appendix), computed spectrally offline by :mod:`skysh.solar` and fitted by
+``tools/fit_sky.py`` into the coefficient file (format version 3, member
+``sun_table.npy``), evaluated here at the cost of a runtime call.
+
+-   :class:`SunLight`: built once from a
+    :class:`~skysh.coefficient_file.SkyTable`; :meth:`SunLight.rgb` (linear
+    RGB of the file's colourspace, lux), :meth:`SunLight.xyz` (CIE 1931 XYZ,
+    lux) and :meth:`SunLight.light` (the unit vector towards the sun and its
+    RGB illuminance: a directional light), each for one frame (Python floats:
+    the fast path) or a batch (arrays, broadcast).
+-   :func:`air_mass`, :func:`sun_variables`: the table's variables (Kasten's
+    relative optical mass; the Chebyshev variables x, y), shared with the fit.
+-   :data:`SUN_AIR_MASS_COEFFICIENTS`, :data:`SUN_AIR_MASS_RANGE`,
+    :data:`SUN_VARIABLES`, :data:`SUN_BASIS`, :data:`SUN_UNITS`,
+    :data:`SUN_MAX_LN`: the table's form, which
+    :mod:`skysh.coefficient_file` checks in every file's metadata.
+
+The table (:data:`SUN_BASIS`)
+-----------------------------
+The illuminance depends on the sun zenith only through the relative optical
+mass m (every transmittance of the model is exp(-m x depth)), and its
+logarithm is nearly linear in m; so the table holds ln X, ln Y, ln Z as 2D
+Chebyshev polynomials of x affine in m over [m(0), m(pi/2)] = [0.99949, 36.510]
+and y affine in the turbidity over [2.5, 6]. RGB is the recorded XYZ -> RGB
+matrix of the file's colourspace (colour-science's, no chromatic adaptation:
+the sky's colour route) times exp(ln XYZ). Its held-out error is in the file's
+metadata (``tables.sun.errors``; ``tools/fit_sky.py`` prints it).
+
+Near the horizon the sun leaves the sRGB gamut: blue (at T = 6 green too)
+turns slightly negative, as :func:`skysh.solar.illuminance_rgb` does. Values
+are never NaN or inf, never 0 in XYZ: the file bounds each channel's sum of
+|coefficients| by :data:`SUN_MAX_LN` (at sun zenith pi/2 and T = 6 the
+illuminance is about 2.5e-4 lux).
+
+Cost
+----
+A scalar call: checks on Python floats, m (one cos, one power), the Chebyshev
+terms of both variables as ``cos(k acos v)`` in one vectorised cosine, two
+``np.dot`` contractions (in x, then in y), one exp and one 3 x 3 product.
+``python benchmarks/bench_sunlight.py`` prints it against a 1-band
+:meth:`skysh.SkySH.coefficients` call. ``import skysh.sunlight`` imports numpy
+only (not colour-science, :mod:`skysh.solar` or the coefficient file reader).
+
+References
+----------
+-   Preetham, A. J., Shirley, P., Smits, B. (1999). A Practical Analytic Model
+    for Daylight. SIGGRAPH 1999, appendix (the attenuated sun).
+-   Kasten, F. (1966). A new table and approximation formula for the relative
+    optical air mass. Arch. Meteorol. Geophys. Bioklimatol. B 14.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from skysh import poly
+from skysh._checks import as_float_array, check_range, check_size, number_text
+from skysh._npz import CoefficientFileError
+
+__all__ = [
+    "SUN_AIR_MASS_COEFFICIENTS", "SUN_AIR_MASS_RANGE", "SUN_VARIABLES", "SUN_BASIS", "SUN_UNITS", "SUN_MAX_LN",
+    "air_mass", "sun_variables", "SunLight",
+]
+
+SUN_AIR_MASS_COEFFICIENTS: tuple[float, float, float] = (0.15, 93.885, 1.253)
+"""(a, b, c) of Kasten's (1966) relative optical mass m = 1 / (cos theta + a (b - theta[deg])^-c)
+(``skysh.solar.KASTEN_COEFFICIENTS``, repeated so that the runtime imports no physics; a test compares)."""
+
+_A, _B, _NEG_C = SUN_AIR_MASS_COEFFICIENTS[0], SUN_AIR_MASS_COEFFICIENTS[1], -SUN_AIR_MASS_COEFFICIENTS[2]
+_DEG: float = 180.0 / math.pi
+_ZMIN, _ZMAX = poly.SUN_ZENITH_DOMAIN
+_TMIN, _TMAX = poly.TURBIDITY_DOMAIN
+
+
+def _air_mass_scalar(sun_zenith: float) -> float:
+    return 1.0 / (math.cos(sun_zenith) + _A * (_B - sun_zenith * _DEG) ** _NEG_C)
+
+
+SUN_AIR_MASS_RANGE: tuple[float, float] = (_air_mass_scalar(_ZMIN), _air_mass_scalar(_ZMAX))
+"""(m0, m1): Kasten's m at sun zenith 0 and pi/2, 0.99949 and 36.510 (the interval of the variable x).
+
+Kasten's formula dips slightly below m0 for sun zeniths just above 0 (its
+derivative at 0 is slightly negative; by less than 1e-7, which
+``tests/test_sunlight.py`` asserts); there x is clamped to -1, which moves
+ln XYZ by less than 1e-7 (its slope in m is of order 1): far below the fit's error."""
+
+_X_SCALE: float = 2.0 / (SUN_AIR_MASS_RANGE[1] - SUN_AIR_MASS_RANGE[0])
+_Y_SCALE: float = 2.0 / (_TMAX - _TMIN)
+
+SUN_VARIABLES: dict[str, str] = {
+    "m": "1 / (cos sun_zenith + 0.15 (93.885 - sun_zenith[deg])^-1.253) (Kasten 1966 relative optical mass)",
+    "x": "2 (m - m0) / (m1 - m0) - 1 clamped to [-1, 1], [m0, m1] = air_mass_range (m at sun zenith 0 and pi/2)",
+    "y": "2 (T - 2.5) / (6 - 2.5) - 1 (turbidity T, affine)",
+}
+"""The sun table's Chebyshev variables, as recorded in the file's metadata."""
+
+SUN_BASIS: str = (
+    "ln XYZ_c = sum_k table[k, 0, c] T_i(x) T_j(y), k = i (d_y + 1) + j, c = X, Y, Z: CIE 1931 XYZ of the "
+    "sun's direct normal illuminance (Preetham 1999 appendix), lux; RGB = rgb_from_xyz @ exp(ln XYZ)"
+)
+"""The polynomial form of the sun table, as recorded in the file's metadata."""
+
+SUN_UNITS: str = "ln lux (CIE 1931 XYZ of the direct normal illuminance)"
+"""Units of the sun table's values."""
+
+SUN_MAX_LN: float = 100.0
+"""Largest sum of |coefficients| of a sun table channel (ln lux), hence largest |ln XYZ| (|T_i T_j| <= 1).
+
+exp then lies in [e^-100, e^100] = [3.7e-44, 2.7e43] lux: never 0, inf or NaN, also on the
+horizon. A fit's largest sum is far below (``tools/fit_sky.py`` prints it with the fit)."""
+
+_REAL_SCALAR_TYPES: frozenset[type] = frozenset(
+    {int, np.float64, np.float32, np.float16, np.int64, np.int32, np.int16, np.int8,
+     np.uint64, np.uint32, np.uint16, np.uint8}
+)
+"""Scalar types (besides float) that take the fast path; ``bool`` is not a number here (as skysh.runtime)."""
+
+
+def _real(value: Any) -> float | None:
+    """``value`` as a Python float when it is one real scalar, else None (the batch path checks and names it)."""
+    kind = type(value)
+    if kind is float:
+        return value
+    if kind in _REAL_SCALAR_TYPES or (kind is np.ndarray and value.ndim == 0 and value.dtype.kind in "iuf"):
+        try:
+            return float(value)
+        except OverflowError:
+            return None
+    return None
+
+
+def air_mass(sun_zenith: ArrayLike) -> NDArray[np.float64]:
+    """Kasten's relative optical mass at ``sun_zenith`` (radians in [0, pi/2], any shape): dimensionless, 0.9995 .. 36.51."""
+    ts = check_range(sun_zenith, "sun_zenith", _ZMIN, _ZMAX, unit="rad (the fitted domain)")
+    return 1.0 / (np.cos(ts) + _A * (_B - ts * _DEG) ** _NEG_C)
+
+
+def sun_variables(sun_zenith: ArrayLike, turbidity: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """
+    The sun table's Chebyshev variables (:data:`SUN_VARIABLES`), each in [-1, 1].
+
+    Parameters
+    ----------
+    sun_zenith, turbidity
+        Radians in [0, pi/2] and turbidity in [2.5, 6], any shapes (not broadcast).
+
+    Returns
+    -------
+    x, y
+        x = 2 (m - m0) / (m1 - m0) - 1 (clamped), y = 2 (T - 2.5) / 3.5 - 1.
+    """
+    m = air_mass(sun_zenith)
+    t = check_range(turbidity, "turbidity", _TMIN, _TMAX, unit="(the fitted domain)")
+    return np.clip((m - SUN_AIR_MASS_RANGE[0]) * _X_SCALE - 1.0, -1.0, 1.0), (t - _TMIN) * _Y_SCALE - 1.0
+
+
+def _domain_error(ts: float, t: float) -> ValueError | None:
+    """The refusal of a scalar (sun_zenith, turbidity) outside the fitted domain (NaN included), else None."""
+    if not _ZMIN <= ts <= _ZMAX:
+        return ValueError(f"sun_zenith must lie in [{_ZMIN:g}, {_ZMAX:g}] rad (the fitted domain), got {number_text(ts)}")
+    if not _TMIN <= t <= _TMAX:
+        return ValueError(f"turbidity must lie in [{_TMIN:g}, {_TMAX:g}] (the fitted domain), got {number_text(t)}")
+    return None
+
+
+class SunLight:
+    """
+    The sun's direct illuminance per frame, from a coefficient file's sun table.
+
+    Create from a :class:`~skysh.coefficient_file.SkyTable` holding
+    ``tables["sun"]`` (every format-3 file does), or with :meth:`load`.
+    Methods are read-only and thread-safe.
+
+    Attributes
+    ----------
+    colourspace
+        colour-science name of the file's RGB colourspace (:meth:`rgb`'s).
+    degrees
+        (d_x, d_y) of the sun table.
+    rgb_from_xyz
+        (3, 3) the file's XYZ -> linear RGB matrix (read-only).
+    errors
+        The fit's held-out errors as recorded in the file (a dict; empty if none).
+
+    Examples
+    --------
+    >>> sun = SunLight.load()
+    >>> sun.rgb(0.5, 3.0).shape, sun.rgb([0.1, 0.5], 3.0).shape
+    ((3,), (2, 3))
+    """
+
+    __slots__ = ("colourspace", "degrees", "rgb_from_xyz", "errors", "_by_x", "_angle_map", "_split", "_rgb_t")
+
+    def __init__(self, sky_table: Any) -> None:
+        tables = getattr(sky_table, "tables", None)
+        if not isinstance(tables, Mapping) or "sun" not in tables:
+            raise CoefficientFileError(
+                "the SkyTable has no sun table (tables['sun']): every coefficient file of format version 3 holds "
+                "one; an in-memory SkyTable needs it for the sun's light")
+        sky_table.validate()  # shapes, degrees, bounds (SUN_MAX_LN) and the metadata block's fields where present
+        block = sky_table.metadata.get("tables", {}).get("sun", {})
+        if "rgb_from_xyz" not in block:
+            raise CoefficientFileError("metadata tables['sun'] lacks rgb_from_xyz, the XYZ -> RGB matrix of the file's "
+                                       "colourspace")
+        named = tables["sun"]
+        dx, dy = named.max_degrees
+        self.colourspace: str = sky_table.colourspace
+        self.degrees: tuple[int, int] = (dx, dy)
+        self.errors: dict[str, Any] = dict(block.get("errors", {}))
+        self.rgb_from_xyz: NDArray[np.float64] = np.array(block["rgb_from_xyz"], dtype=np.float64)
+        self._rgb_t = np.ascontiguousarray(self.rgb_from_xyz.T)
+        # ln XYZ = T(y) . (T(x) . by_x).reshape(d_y + 1, 3): contracted in x, then in y.
+        self._by_x = np.ascontiguousarray(np.asarray(named.table, dtype=np.float64)[:, 0, :].reshape(dx + 1, (dy + 1) * 3))
+        # cos(angle_map @ (acos x, acos y)) = T_0..T_dx(x), T_0..T_dy(y).
+        self._angle_map = np.zeros((dx + dy + 2, 2))
+        self._angle_map[: dx + 1, 0] = np.arange(dx + 1)
+        self._angle_map[dx + 1 :, 1] = np.arange(dy + 1)
+        self._split = dx + 1
+        for array in (self.rgb_from_xyz, self._rgb_t, self._by_x, self._angle_map):
+            array.flags.writeable = False
+
+    @classmethod
+    def load(cls, path: str | Path | None = None) -> SunLight:
+        """The sun of the shipped coefficient file (or ``path``), checked (:func:`skysh.coefficient_file.read`)."""
+        from skysh import coefficient_file  # the reader, only when loading
+
+        return cls(coefficient_file.read(path))
+
+    def __repr__(self) -> str:
+        return f"SunLight(degrees={self.degrees}, colourspace={self.colourspace!r})"
+
+    # ------------------------------------------------------------------ #
+    def _ln_one(self, ts: float, t: float) -> NDArray[np.float64]:
+        """ln XYZ (3,) at one checked point: arithmetic on the prepared tables only."""
+        x = (1.0 / (math.cos(ts) + _A * (_B - ts * _DEG) ** _NEG_C) - SUN_AIR_MASS_RANGE[0]) * _X_SCALE - 1.0
+        y = (t - _TMIN) * _Y_SCALE - 1.0
+        # Clamp what rounding (and Kasten's dip near the zenith) pushes past +-1; T_k = cos(k acos v), error <= k^2 eps.
+        angles = (math.acos(x if -1.0 < x < 1.0 else math.copysign(1.0, x)),
+                  math.acos(y if -1.0 < y < 1.0 else math.copysign(1.0, y)))
+        packed = np.cos(np.dot(self._angle_map, angles))
+        i = self._split
+        return np.dot(packed[i:], np.dot(packed[:i], self._by_x).reshape(-1, 3))
+
+    def _ln_batch(self, sun_zenith: ArrayLike, turbidity: ArrayLike) -> tuple[NDArray[np.float64], tuple[int, ...]]:
+        """ln XYZ (n, 3) at checked, broadcast points, and their broadcast shape."""
+        ts = check_range(sun_zenith, "sun_zenith", _ZMIN, _ZMAX, unit="rad (the fitted domain)")
+        t = check_range(turbidity, "turbidity", _TMIN, _TMAX, unit="(the fitted domain)")
+        try:
+            shape = np.broadcast_shapes(ts.shape, t.shape)
+        except ValueError:
+            raise ValueError(f"sun_zenith and turbidity must broadcast together, got shapes {ts.shape} and {t.shape}") from None
+        size = math.prod(shape)
+        check_size(size * self._by_x.shape[1], "sun_zenith" if ts.size >= t.size else "turbidity", f"{size:,} frames")
+        x, y = sun_variables(np.broadcast_to(ts, shape).ravel(), np.broadcast_to(t, shape).ravel())
+        tx = poly._chebyshev(x, self.degrees[0])
+        ty = poly._chebyshev(y, self.degrees[1])
+        partial = (tx @ self._by_x).reshape(size, self.degrees[1] + 1, 3)
+        return np.einsum("nj,njc->nc", ty, partial), shape
+
+    def xyz(self, sun_zenith: ArrayLike, turbidity: ArrayLike) -> NDArray[np.float64]:
+        """
+        CIE 1931 XYZ of the sun's direct normal illuminance, lux.
+
+        Parameters
+        ----------
+        sun_zenith
+            Radians, [0, pi/2] (the fitted domain).
+        turbidity
+            [2.5, 6] (the fitted domain).
+
+        Returns
+        -------
+        ndarray
+            (3,) for two real scalars; else (..., 3) over the broadcast shape
+            (empty inputs: an empty result). Positive and finite.
+
+        Raises
+        ------
+        ValueError
+            For a parameter outside its range (named, with the range), NaN or
+            inf, text, booleans, or shapes that do not broadcast.
+        """
+        ts, t = _real(sun_zenith), _real(turbidity)
+        if ts is not None and t is not None:
+            error = _domain_error(ts, t)
+            if error is not None:
+                raise error
+            return np.exp(self._ln_one(ts, t))
+        ln, shape = self._ln_batch(sun_zenith, turbidity)
+        return np.exp(ln).reshape(shape + (3,))
+
+    def rgb(self, sun_zenith: ArrayLike, turbidity: ArrayLike) -> NDArray[np.float64]:
+        """
+        Linear RGB (the file's colourspace) of the sun's direct normal illuminance, lux per channel.
+
+        ``rgb_from_xyz @ xyz(sun_zenith, turbidity)``: R = G = B = Y for a
+        white of the colourspace's whitepoint; near the horizon a channel
+        outside the gamut turns slightly negative. Arguments, shapes and
+        refusals as :meth:`xyz`; two Python floats take the fast path.
+        """
+        ts, t = _real(sun_zenith), _real(turbidity)
+        if ts is not None and t is not None:
+            if not (_ZMIN <= ts <= _ZMAX and _TMIN <= t <= _TMAX):
+                raise _domain_error(ts, t)  # type: ignore[misc]
+            return np.dot(self.rgb_from_xyz, np.exp(self._ln_one(ts, t)))
+        ln, shape = self._ln_batch(sun_zenith, turbidity)
+        return (np.exp(ln) @ self._rgb_t).reshape(shape + (3,))
+
+    def light(
+        self, sun_zenith: ArrayLike, turbidity: ArrayLike, sun_azimuth: ArrayLike = 0.0
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """
+        The sun as a directional light: the unit vector towards it and its RGB illuminance.
+
+        Parameters
+        ----------
+        sun_zenith, turbidity
+            As :meth:`xyz`.
+        sun_azimuth
+            Radians, any finite value; from +X towards +Y (Z up).
+
+        Returns
+        -------
+        direction, rgb
+            ``(sin ts cos phi, sin ts sin phi, cos ts)`` and :meth:`rgb` (lux
+            per channel at normal incidence: an engine's directional light of
+            that colour and intensity), each (3,) for real scalars, else (..., 3)
+            over the broadcast shape of the three parameters.
+
+        Raises
+        ------
+        ValueError
+            As :meth:`xyz`; ``sun_azimuth`` NaN, inf or not a number.
+        """
+        ts, t, phi = _real(sun_zenith), _real(turbidity), _real(sun_azimuth)
+        if ts is not None and t is not None and phi is not None:
+            if not math.isfinite(phi):
+                raise ValueError(f"sun_azimuth must be finite (radians), got {phi!r}")
+            rgb = self.rgb(ts, t)  # checks the domain
+            s = math.sin(ts)
+            phi = math.fmod(phi, 2.0 * math.pi)
+            return np.array((s * math.cos(phi), s * math.sin(phi), math.cos(ts))), rgb
+        zen = check_range(sun_zenith, "sun_zenith", _ZMIN, _ZMAX, unit="rad (the fitted domain)")
+        a = np.fmod(as_float_array(sun_azimuth, "sun_azimuth"), 2.0 * math.pi)
+        tu = check_range(turbidity, "turbidity", _TMIN, _TMAX, unit="(the fitted domain)")
+        try:
+            zen, tu, a = np.broadcast_arrays(zen, tu, a)
+        except ValueError:
+            raise ValueError(
+                f"sun_zenith, turbidity and sun_azimuth must broadcast together, got shapes {np.shape(sun_zenith)}, "
+                f"{np.shape(turbidity)} and {np.shape(sun_azimuth)}") from None
+        sine = np.sin(zen)
+        return np.stack([sine * np.cos(a), sine * np.sin(a), np.cos(zen)], axis=-1), self.rgb(zen, tu)

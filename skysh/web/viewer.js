@@ -1,0 +1,409 @@
+// skysh viewer: the page. Controls -> coefficients (skysh's JavaScript runtime, inlined in
+// index.html) -> one WebGL2 canvas drawn panel by panel, the error numbers and the read-out.
+// A control change schedules one animation frame that does all of it (nothing is deferred).
+// globalThis.skyshViewer also serves the browser tests (state, nextFrame, readPanel, ...).
+"use strict";
+
+(function () {
+  const DEG = Math.PI / 180.0;
+  const viewer = { frame: 0, startupMs: null, updateMs: null };
+  globalThis.skyshViewer = viewer;
+  let resolveReady;
+  viewer.ready = new Promise((resolve) => { resolveReady = resolve; });
+
+  const $ = (id) => document.getElementById(id);
+  let config, sky, runtime, gl, programs, canvas, panels;
+  let current = null; // everything the last frame computed
+  let pending = false;
+  const frameWaiters = [];
+
+  // ------------------------------------------------------------------ controls
+  const RANGES = ["sun-zenith", "sun-azimuth", "turbidity", "bands", "ev"];
+  const CHECKS = ["gibbs", "dering", "mark-negative", "irradiance"];
+  const SELECTS = ["engine", "readout-format"];
+
+  function controls() {
+    const value = (id) => Number($(id).value);
+    const [zmin, zmax] = runtime.SUN_ZENITH_DOMAIN, [tmin, tmax] = runtime.TURBIDITY_DOMAIN;
+    const bands = Math.round(value("bands"));
+    const engine = $("engine").value || null;
+    return {
+      sunZenithDeg: value("sun-zenith"),
+      sunAzimuthDeg: value("sun-azimuth"),
+      // degrees -> radians, kept inside the runtime's domain (90 deg may round a hair above pi/2)
+      sunZenith: Math.min(Math.max(value("sun-zenith") * DEG, zmin), zmax),
+      sunAzimuth: value("sun-azimuth") * DEG,
+      turbidity: Math.min(Math.max(value("turbidity"), tmin), tmax),
+      bands,
+      gibbs: $("gibbs").checked,
+      dering: $("dering").checked,
+      markNegative: $("mark-negative").checked,
+      ev: value("ev"),
+      engine,
+      irradiance: engine === null && $("irradiance").checked,
+      readoutFormat: $("readout-format").value,
+    };
+  }
+
+  /** Defaults by intent, as the Python runtime: diffuse (irradiance, engines) -> no Gibbs, deringing on. */
+  function applyIntent() {
+    const diffuse = $("engine").value !== "" || $("irradiance").checked;
+    $("gibbs").checked = !diffuse;
+    $("dering").checked = diffuse;
+  }
+
+  /** Controls that depend on others (deringing needs a runtime that has it), and the values shown. */
+  function syncControls() {
+    const bands = Math.round(Number($("bands").value));
+    const available = viewer.deringBands.includes(bands);
+    $("dering").disabled = !available;
+    if (!available) $("dering").checked = false; // what is shown is what is applied
+    $("dering-note").textContent = available ? "" : `(not in this runtime for ${bands} bands)`;
+    $("irradiance").disabled = $("engine").value !== "";
+    if ($("irradiance").disabled) $("irradiance").checked = false;
+    const number = (id) => Number($(id).value);
+    $("sun-zenith-out").value = number("sun-zenith").toFixed(1);
+    $("sun-azimuth-out").value = number("sun-azimuth").toFixed(1);
+    $("turbidity-out").value = number("turbidity").toFixed(2);
+    $("bands-out").value = `${bands} (${bands * bands} coefficients)`;
+    $("ev-out").value = (number("ev") >= 0 ? "+" : "") + number("ev").toFixed(1);
+  }
+
+  function onInput(event) {
+    if (event.target.id === "engine" || event.target.id === "irradiance") applyIntent();
+    syncControls();
+    schedule();
+  }
+
+  function bindControls() {
+    const engine = $("engine");
+    for (const name of runtime.ENGINES) engine.add(new Option(`${name} (at most ${config.engineMaxBands[name]} bands)`, name));
+    for (const id of [...RANGES, ...CHECKS, ...SELECTS]) $(id).addEventListener("input", onInput);
+    $("copy").addEventListener("click", copyReadout);
+    syncControls();
+  }
+
+  // ------------------------------------------------------------------ read-out
+  const NUMBER_LIST = /\[\s*(-?[0-9.eE+-]+(?:,\s*-?[0-9.eE+-]+)*)\s*\]/g;
+
+  function nest(values, shape) {
+    const rows = [];
+    const width = values.length / shape[0];
+    for (let i = 0; i < shape[0]; i++) rows.push(Array.prototype.slice.call(values, i * width, (i + 1) * width));
+    return rows;
+  }
+
+  /** The read-out text: the coefficients as `skysh coeffs --format json` writes them, or the engine snippet. */
+  function readout(s) {
+    const options = { bands: s.bands, gibbs: s.gibbs, dering: s.dering };
+    if (s.engine !== null) options.engine = s.engine;
+    else options.irradiance = s.irradiance;
+    let values;
+    try {
+      values = runtime.coefficients(s.sunZenith, s.turbidity, s.sunAzimuth, options);
+    } catch (error) {
+      return `// ${error.message}`;
+    }
+    if (s.readoutFormat === "snippet") {
+      if (s.engine === null) return "// Choose an engine preset for a paste-ready snippet (the JSON holds skysh's own coefficients).";
+      return SkyshSky.fillSnippet(config.snippets[s.engine][String(s.bands)], values);
+    }
+    const info = {
+      skysh_version: runtime.SKYSH_VERSION,
+      quantity: s.irradiance ? "irradiance" : "radiance",
+      bands: s.bands,
+      sun_zenith_deg: s.sunZenith / DEG,
+      sun_azimuth_deg: s.sunAzimuth / DEG,
+      sun_zenith_rad: s.sunZenith,
+      sun_azimuth_rad: s.sunAzimuth,
+      turbidity: s.turbidity,
+      gibbs: s.gibbs,
+      dering: s.dering,
+      colourspace: config.colourspace,
+    };
+    let payload;
+    if (s.engine !== null) {
+      const layout = runtime.engineLayout(s.engine, s.bands);
+      payload = { values: nest(values, layout.shape), engine: s.engine, shape: layout.shape, labels: layout.labels, ...info };
+    } else {
+      const lm = [];
+      for (let l = 0; l < s.bands; l++) for (let m = -l; m <= l; m++) lm.push([l, m]);
+      payload = {
+        coefficients: nest(values, [s.bands * s.bands]), lm, ...info, up: "z",
+        units: s.irradiance ? "cd/m^2*sr" : "cd/m^2",
+        convention: "real orthonormal SH with the Condon-Shortley phase, index l(l+1)+m; Z up, azimuth from +X towards +Y",
+      };
+    }
+    return JSON.stringify(payload, null, 1).replace(NUMBER_LIST, (_, list) => `[${list.split(/\s+/).join(" ")}]`);
+  }
+
+  async function copyReadout() {
+    const text = $("readout").value;
+    const status = $("copy-status");
+    try {
+      await navigator.clipboard.writeText(text);
+      status.textContent = "copied";
+    } catch (error) {
+      $("readout").select();
+      const copied = typeof document.execCommand === "function" && document.execCommand("copy");
+      status.textContent = copied ? "copied" : "the browser refused the clipboard: the text is selected, copy it by hand";
+    }
+  }
+
+  // ------------------------------------------------------------------ WebGL2
+  function compile(type, source) {
+    const shader = gl.createShader(type);
+    gl.shaderSource(shader, source);
+    gl.compileShader(shader);
+    if (!gl.getShaderParameter(shader, gl.COMPILE_STATUS)) throw new Error(`shader: ${gl.getShaderInfoLog(shader)}`);
+    return shader;
+  }
+
+  const UNIFORMS = ["rect", "sh", "irr", "ground", "sun", "perez", "scale", "xyz_to_rgb", "exposure", "mark_negative", "camera", "target"];
+  const ARRAYS = ["sh", "irr", "perez"];
+
+  function link(view) {
+    const program = gl.createProgram();
+    gl.attachShader(program, compile(gl.VERTEX_SHADER, SkyshShaders.VERTEX));
+    gl.attachShader(program, compile(gl.FRAGMENT_SHADER, SkyshShaders.fragment(config, view)));
+    gl.linkProgram(program);
+    if (!gl.getProgramParameter(program, gl.LINK_STATUS)) throw new Error(`program ${view}: ${gl.getProgramInfoLog(program)}`);
+    const uniforms = {};
+    for (const name of UNIFORMS) uniforms[name] = gl.getUniformLocation(program, `u_${name}${ARRAYS.includes(name) ? "[0]" : ""}`);
+    return { program, uniforms };
+  }
+
+  function initGl() {
+    canvas = $("gl");
+    gl = canvas.getContext("webgl2", { antialias: false, alpha: true, premultipliedAlpha: true });
+    if (!gl) throw new Error("WebGL2 is not available in this browser: the views need it (the read-out works without)");
+    programs = Object.fromEntries(SkyshShaders.VIEWS.map((view) => [view, link(view)]));
+    gl.bindVertexArray(gl.createVertexArray());
+    panels = [...document.querySelectorAll(".view")].map((view) => ({
+      name: view.parentElement.dataset.panel, view, program: programs[view.dataset.mode],
+    }));
+    new ResizeObserver(schedule).observe($("views"));
+    canvas.addEventListener("webglcontextlost", (event) => { event.preventDefault(); $("footer").textContent = "WebGL context lost: reload the page."; });
+  }
+
+  function panelRect(panel, box, scale) {
+    const r = panel.view.getBoundingClientRect();
+    const x = Math.round((r.left - box.left + 1) * scale), top = Math.round((r.top - box.top + 1) * scale);
+    const w = Math.round((r.width - 2) * scale), h = Math.round((r.height - 2) * scale); // inside the 1 px border
+    return { x, y: canvas.height - top - h, w, h };
+  }
+
+  let UP = null; // the SH basis at the zenith (the ground's normal)
+
+  /** Upload the frame's uniforms: the coefficients (radiance, irradiance), the sky, the exposure. */
+  function setUniforms(state, coeffs, exposure) {
+    const n = state.bands, size = config.maxBands * config.maxBands * 3;
+    const radiance = new Float32Array(size), irradiance = new Float32Array(size);
+    const ground = [0.0, 0.0, 0.0];
+    sky.basis(0.0, 0.0, 1.0, n, UP, 0);
+    for (let l = 0; l < n; l++) {
+      for (let k = 3 * l * l; k < 3 * (l + 1) * (l + 1); k++) {
+        radiance[k] = coeffs[k];
+        irradiance[k] = config.lobe[l] * coeffs[k];
+        ground[k % 3] += (UP[Math.floor(k / 3)] * config.lobe[l] * coeffs[k]) / Math.PI;
+      }
+    }
+    const m = config.xyzToRgb;
+    const xyzToRgb = [m[0][0], m[1][0], m[2][0], m[0][1], m[1][1], m[2][1], m[0][2], m[1][2], m[2][2]];
+    for (const { program, uniforms } of Object.values(programs)) { // uniforms are per program
+      gl.useProgram(program);
+      gl.uniform3fv(uniforms.sh, radiance);
+      gl.uniform3fv(uniforms.irr, irradiance);
+      gl.uniform3fv(uniforms.ground, ground);
+      gl.uniform3fv(uniforms.sun, state.sky.sun);
+      gl.uniform1fv(uniforms.perez, state.sky.perez.flat());
+      gl.uniform3fv(uniforms.scale, state.sky.scale);
+      gl.uniformMatrix3fv(uniforms.xyz_to_rgb, false, xyzToRgb);
+      gl.uniform1f(uniforms.exposure, exposure);
+      gl.uniform1i(uniforms.mark_negative, state.markNegative ? 1 : 0);
+      gl.uniform3fv(uniforms.camera, [-4.6, -3.0, 1.9]);
+      gl.uniform3fv(uniforms.target, [0.0, 0.0, 0.8]);
+    }
+  }
+
+  /** Draw the panels (all, or the one named `only`); their rectangles in canvas pixels. */
+  function draw(state, coeffs, exposure, only = null) {
+    const scale = Math.min(window.devicePixelRatio || 1, 2);
+    const box = canvas.getBoundingClientRect();
+    const width = Math.round(box.width * scale), height = Math.round(box.height * scale);
+    if (canvas.width !== width || canvas.height !== height) { canvas.width = width; canvas.height = height; }
+    gl.disable(gl.SCISSOR_TEST);
+    gl.viewport(0, 0, width, height);
+    gl.clearColor(0, 0, 0, 0);
+    gl.clear(gl.COLOR_BUFFER_BIT);
+    setUniforms(state, coeffs, exposure);
+    gl.enable(gl.SCISSOR_TEST);
+    const rects = {};
+    for (const panel of panels) {
+      const r = panelRect(panel, box, scale);
+      rects[panel.name] = r;
+      if (r.w <= 0 || r.h <= 0 || (only !== null && panel.name !== only)) continue;
+      gl.viewport(r.x, r.y, r.w, r.h);
+      gl.scissor(r.x, r.y, r.w, r.h);
+      gl.useProgram(panel.program.program);
+      gl.uniform4f(panel.program.uniforms.rect, r.x, r.y, r.w, r.h);
+      gl.drawArrays(gl.TRIANGLES, 0, 3);
+    }
+    return rects;
+  }
+
+  // ------------------------------------------------------------------ overlays
+  function marker(view, className) {
+    let el = view.querySelector(`.${className}`);
+    if (!el) {
+      el = document.createElement("div");
+      el.className = className;
+      view.appendChild(el);
+    }
+    return el;
+  }
+
+  function axisLabel(view, key, text, css) {
+    const el = marker(view, `axis-${key}`);
+    el.classList.add("axis");
+    el.textContent = text;
+    Object.assign(el.style, css);
+  }
+
+  function overlays(state) {
+    const phi = state.sky.sunAzimuth, ts = state.sunZenith;
+    for (const panel of panels) {
+      const view = panel.view;
+      if (view.classList.contains("fisheye")) {
+        const r = ts / (Math.PI / 2) * 50; // percent of the half width
+        const sun = marker(view, "marker");
+        sun.style.left = `${50 + r * Math.sin(phi)}%`;
+        sun.style.top = `${50 - r * Math.cos(phi)}%`;
+        axisLabel(view, "x", "+X", { left: "50%", top: "2px" });
+        axisLabel(view, "y", "+Y", { right: "4px", top: "50%" });
+      } else if (view.classList.contains("latlong")) {
+        const wrapped = phi - 2 * Math.PI * Math.round(phi / (2 * Math.PI)); // [-pi, pi], as math.remainder
+        const sun = marker(view, "marker");
+        sun.style.left = `${(wrapped + Math.PI) / (2 * Math.PI) * 100}%`;
+        sun.style.top = `${ts / Math.PI * 100}%`;
+        marker(view, "horizon");
+        axisLabel(view, "w", "-180\u00b0", { left: "3px", bottom: "2px" });
+        axisLabel(view, "c", "0\u00b0", { left: "50%", bottom: "2px" });
+        axisLabel(view, "e", "180\u00b0", { right: "3px", bottom: "2px" });
+      }
+    }
+  }
+
+  // ------------------------------------------------------------------ the frame
+  function percent(x) {
+    return x >= 0.1 ? `${(100 * x).toFixed(1)} %` : `${(100 * x).toPrecision(3)} %`;
+  }
+
+  function render(only = null) {
+    const start = performance.now();
+    const s = controls();
+    s.sky = sky.skyState(s.sunZenith, s.turbidity, s.sunAzimuth);
+    const coeffs = runtime.coefficients(s.sunZenith, s.turbidity, s.sunAzimuth, { bands: s.bands, gibbs: s.gibbs, dering: s.dering });
+    const numbers = sky.metrics(s.sky, coeffs, s.bands);
+    const exposure = (config.keyValue / numbers.logAverage) * 2 ** s.ev;
+    const rects = gl ? draw(s, coeffs, exposure, only) : {};
+    overlays(s);
+    $("error-value").textContent = percent(numbers.error);
+    $("ringing-value").textContent = percent(numbers.ringing);
+    $("exposure-value").textContent = `${exposure.toPrecision(4)} per cd/m\u00b2`;
+    const text = readout(s);
+    if ($("readout").value !== text) $("readout").value = text;
+    current = { ...s, coefficients: Array.from(coeffs), exposure, ...numbers, rects };
+    viewer.frame += 1;
+    viewer.updateMs = performance.now() - start;
+    $("update-ms").textContent = `${viewer.updateMs.toFixed(1)} ms (CPU, last change)`;
+  }
+
+  function frame() {
+    pending = false;
+    render();
+    if (viewer.startupMs === null) {
+      viewer.startupMs = performance.now(); // since the navigation started
+      $("footer").textContent = `skysh ${runtime.SKYSH_VERSION}: first frame ${viewer.startupMs.toFixed(0)} ms after navigation.`;
+      resolveReady();
+    }
+    for (const resolve of frameWaiters.splice(0)) resolve(viewer.frame);
+  }
+
+  function schedule() {
+    if (!pending) {
+      pending = true;
+      requestAnimationFrame(frame);
+    }
+  }
+
+  function fatal(error) {
+    const box = document.createElement("p");
+    box.className = "fatal";
+    box.textContent = `The viewer could not start: ${error.message}`;
+    $("views").prepend(box);
+  }
+
+  // ------------------------------------------------------------------ start and test hooks
+  viewer.start = function start(rt) {
+    runtime = rt;
+    config = JSON.parse($("skysh-config").textContent);
+    sky = SkyshSky.create(config);
+    UP = new Float64Array(config.maxBands * config.maxBands);
+    viewer.deringBands = [];
+    for (let n = 1; n <= runtime.MAX_BANDS; n++) {
+      try {
+        runtime.coefficients(0.5, 3.0, 0.0, { bands: n, dering: true });
+        viewer.deringBands.push(n);
+      } catch (error) {
+        if (!(error instanceof RangeError)) throw error; // this runtime has no deringing for n bands
+      }
+    }
+    $("bands").max = String(runtime.MAX_BANDS);
+    $("rule-size").textContent = String(sky.ruleSize);
+    bindControls();
+    try {
+      initGl();
+    } catch (error) {
+      gl = null;
+      fatal(error);
+      console.error(error);
+    }
+    schedule();
+  };
+
+  /** What the last frame computed (controls, coefficients, error numbers, exposure, panel rectangles). */
+  viewer.state = () => (current === null ? null : JSON.parse(JSON.stringify(current)));
+
+  /** Promise of the next frame's number. */
+  viewer.nextFrame = () => new Promise((resolve) => { frameWaiters.push(resolve); schedule(); });
+
+  /** Draw a panel now and read its pixels: {width, height, rgba (base64, rows top to bottom)}. */
+  viewer.readPanel = (name) => {
+    render(name); // this panel only; the next frame draws them all again
+    schedule();
+    const r = current.rects[name];
+    const pixels = new Uint8Array(r.w * r.h * 4);
+    gl.readPixels(r.x, r.y, r.w, r.h, gl.RGBA, gl.UNSIGNED_BYTE, pixels);
+    const flipped = new Uint8Array(pixels.length);
+    const row = r.w * 4;
+    for (let y = 0; y < r.h; y++) flipped.set(pixels.subarray((r.h - 1 - y) * row, (r.h - y) * row), y * row);
+    let binary = "";
+    for (let i = 0; i < flipped.length; i += 0x8000) binary += String.fromCharCode(...flipped.subarray(i, i + 0x8000));
+    return { width: r.w, height: r.h, rgba: btoa(binary) };
+  };
+
+  /** The CPU sky and basis at flat unit vectors [x0, y0, z0, x1, ...] (for the tests). */
+  viewer.trueRadiance = (sunZenith, turbidity, sunAzimuth, dirs) => {
+    const state = sky.skyState(sunZenith, turbidity, sunAzimuth);
+    const out = new Float64Array(dirs.length);
+    for (let k = 0; k < dirs.length; k += 3) sky.radiance(state, dirs[k], dirs[k + 1], dirs[k + 2], out, k);
+    return Array.from(out);
+  };
+  viewer.basis = (dirs, n) => {
+    const out = new Float64Array((dirs.length / 3) * n * n);
+    for (let k = 0; k < dirs.length / 3; k++) sky.basis(dirs[3 * k], dirs[3 * k + 1], dirs[3 * k + 2], n, out, k * n * n);
+    return Array.from(out);
+  };
+  viewer.pyRepr = (values) => values.map(SkyshSky.pyRepr);
+})();

@@ -1,0 +1,278 @@
+"""
+The package's layers, from its source
+=====================================
+
+Every ``skysh/*.py`` is parsed with :mod:`ast` (nothing is imported) and its imports of
+other ``skysh`` modules are checked against two tables:
+
+-   :data:`LAYERS`: each module's layer. A module may import only modules of strictly
+    lower layers, so the import graph has no cycle and no upward edge. The two lazy
+    upward imports that exist are listed in :data:`LAZY_UPWARD` with their reason; they
+    must stay inside a function.
+-   :data:`ALLOWED`: each module's ``skysh`` imports (module level or inside functions;
+    ``if TYPE_CHECKING:`` blocks are not imports at run time and are not counted). A new
+    import fails the test until it is added here, where :data:`LAYERS` checks its
+    direction.
+
+Also: no library module imports the tools (``tools/``, its studies and report) or
+matplotlib at all, and the runtime side (:data:`RUNTIME_SIDE` and everything it imports
+at module level) imports neither colour-science nor the tools at module level.
+``from skysh import X`` counts as an import of ``skysh/X.py``; ``SkySH`` and
+``__version__`` resolve to the modules the package's ``__init__`` takes them from.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+from typing import NamedTuple
+
+import pytest
+
+ROOT: Path = Path(__file__).resolve().parent.parent
+SKYSH: Path = ROOT / "skysh"
+TOOLS: Path = ROOT / "tools"
+
+LAYERS: dict[str, int] = {
+    # 0: foundation (argument checks, version, the npz reader)
+    "_version": 0, "_checks": 0, "_npz": 0, "_mitsuba_data": 0,
+    # 1: SH mathematics and the fitted parameters' domain and basis
+    "sh": 1, "poly": 1, "sun": 1,
+    # 2: the sky model, and algorithms on SH coefficients alone
+    "preetham": 2, "ground": 2, "shmin": 2, "hazel": 2, "quantize": 2,
+    # 3: built on those: the spectral sun model, deringing, the sun's light
+    "solar": 3, "dering": 3, "sunlight": 3,
+    # 4: the coefficient file; the Hosek-Wilkie sky (built on the solar spectrum and the ground)
+    "coefficient_file": 4, "hosek": 4,
+    # 5: the offline fit, the per-frame sun and ground, deringing as emitted code
+    "fit": 5, "lights": 5, "export_dering": 5,
+    # 6: the per-frame runtime
+    "runtime": 6,
+    # 7: consumers: the irradiance fit, engine conventions, rendering, exports
+    "irradiance_fit": 7, "engines": 7, "render": 7, "export": 7,
+    # 8: the JavaScript export (built on export)
+    "export_js": 8,
+    # 9: applications and the command line's text
+    "viewer": 9, "cli_text": 9,
+    # 10: the command line
+    "cli": 10,
+    # 11: the package and its entry point
+    "__init__": 11, "__main__": 11,
+}
+"""Layer of every module of ``skysh/`` (issue 14's picture: SH mathematics -> sky model -> fit
+and file -> runtime -> post-processing -> exports, engines and CLI, as the imports really run)."""
+
+ALLOWED: dict[str, frozenset[str]] = {name: frozenset(deps) for name, deps in {
+    "_version": (),
+    "_checks": (),
+    "_npz": (),
+    "_mitsuba_data": (),
+    "sh": ("_checks",),
+    "poly": ("_checks",),
+    "sun": ("_checks",),
+    "preetham": ("_checks", "sh"),
+    "ground": ("_checks", "sh"),
+    "shmin": ("_checks", "sh"),
+    "hazel": ("_checks", "sh"),
+    "quantize": ("_checks", "sh"),
+    "solar": ("_checks", "poly", "sh", "preetham"),
+    "dering": ("_checks", "sh", "shmin"),
+    "sunlight": ("_checks", "_npz", "poly", "coefficient_file"),
+    "coefficient_file": ("_checks", "_npz", "_version", "poly", "sunlight"),
+    "hosek": ("_checks", "_mitsuba_data", "ground", "preetham", "sh", "solar"),
+    "fit": ("_checks", "coefficient_file", "poly", "preetham", "sh", "sunlight", "solar"),
+    "lights": ("_checks", "coefficient_file", "ground", "poly", "preetham", "sh", "solar", "sunlight"),
+    "runtime": ("_checks", "coefficient_file", "ground", "lights", "poly", "preetham", "sh", "sunlight", "dering"),
+    "export_dering": ("_checks", "dering", "shmin"),
+    "irradiance_fit": ("_checks", "fit", "preetham", "sh"),
+    "engines": ("_checks", "sh"),
+    "render": ("_checks", "ground", "lights", "preetham", "runtime", "sh", "solar"),
+    "export": ("_checks", "_version", "coefficient_file", "preetham", "runtime", "sh", "export_dering", "export_js"),
+    "export_js": ("_version", "export", "preetham", "runtime", "sh", "engines", "export_dering"),
+    "viewer": ("_version", "engines", "export", "preetham", "render", "runtime", "sh"),
+    "cli_text": ("_checks", "engines", "export", "sh"),
+    "cli": ("_version", "cli_text", "engines", "export", "export_js", "poly", "preetham", "render", "runtime", "sh",
+            "sun", "viewer"),
+    "__init__": ("_version", "runtime"),
+    "__main__": ("cli",),
+}.items()}
+"""The ``skysh`` imports of every module as of issue 14 (after the studies moved to tools/studies/)."""
+
+LAZY_UPWARD: dict[tuple[str, str], str] = {
+    ("sunlight", "coefficient_file"): "SunLight.load reads the file, whose format imports sunlight's constants",
+    ("export", "export_js"): "export_source dispatches the js/json languages to export_js, built on export",
+}
+"""Upward imports that exist today, each only inside a function (a cycle broken at run time)."""
+
+RUNTIME_SIDE: tuple[str, ...] = ("runtime", "sunlight", "coefficient_file", "sh", "poly", "dering", "shmin", "engines")
+"""Modules a renderer loads per frame or at start-up: light at import."""
+
+NOT_AT_RUNTIME_IMPORT: frozenset[str] = frozenset({"colour", "matplotlib"})
+"""Top-level packages the runtime side must not import at module level (directly or through skysh)."""
+
+NEVER_IN_THE_LIBRARY: frozenset[str] = frozenset(
+    {"tools", "matplotlib"} | {p.stem for p in TOOLS.glob("*.py")} | {p.name for p in TOOLS.iterdir() if p.is_dir()}
+)
+"""Top-level names no ``skysh`` module may import anywhere: the tools (scripts, the studies package,
+the report package) and matplotlib."""
+
+FACADE: dict[str, str] = {"SkySH": "runtime", "__version__": "_version"}
+"""Names ``from skysh import ...`` takes from a module other than one of the same name."""
+
+MODULES: frozenset[str] = frozenset(p.stem for p in SKYSH.glob("*.py"))
+
+
+class Import(NamedTuple):
+    target: str  # a skysh module name, or "ext:<top-level package>"
+    lazy: bool  # inside a function (runs on call, not on import)
+    type_only: bool  # inside ``if TYPE_CHECKING:``
+    line: int
+
+
+def _targets(node: ast.AST) -> list[str]:
+    if isinstance(node, ast.Import):
+        out = []
+        for alias in node.names:
+            parts = alias.name.split(".")
+            out.append((parts[1] if len(parts) > 1 else "__init__") if parts[0] == "skysh" else "ext:" + parts[0])
+        return out
+    if isinstance(node, ast.ImportFrom):
+        module = node.module or ""
+        if node.level == 0 and module != "skysh" and not module.startswith("skysh."):
+            return ["ext:" + module.split(".")[0]]
+        sub = module.split(".")[1] if module.startswith("skysh.") else (module.split(".")[0] if node.level else "")
+        if sub:
+            return [sub]
+        return [a.name if a.name in MODULES else FACADE.get(a.name, "__init__") for a in node.names]
+    return []
+
+
+def _is_type_checking(node: ast.AST) -> bool:
+    test = getattr(node, "test", None)
+    return isinstance(node, ast.If) and (
+        (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING")
+        or (isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING")
+    )
+
+
+def imports_of(source: str) -> list[Import]:
+    """Every import statement of a module's source, with whether it is lazy or type-only."""
+    found: list[Import] = []
+
+    def visit(node: ast.AST, lazy: bool, type_only: bool) -> None:
+        for child in ast.iter_child_nodes(node):
+            inner_lazy = lazy or isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda))
+            if _is_type_checking(child):
+                assert isinstance(child, ast.If)
+                for stmt in child.body:
+                    found.extend(Import(t, lazy, True, stmt.lineno) for t in _targets(stmt))
+                    visit(stmt, lazy, True)
+                for stmt in child.orelse:
+                    found.extend(Import(t, lazy, type_only, stmt.lineno) for t in _targets(stmt))
+                    visit(stmt, lazy, type_only)
+                continue
+            found.extend(Import(t, lazy, type_only, getattr(child, "lineno", 0)) for t in _targets(child))
+            visit(child, inner_lazy, type_only)
+
+    visit(ast.parse(source), False, False)
+    return found
+
+
+def layer_violations(module: str, source: str) -> list[str]:
+    """What is wrong with ``module``'s imports against :data:`ALLOWED`, :data:`LAYERS` and :data:`LAZY_UPWARD`."""
+    problems = []
+    for imp in imports_of(source):
+        if imp.type_only or imp.target.startswith("ext:") or imp.target == module:
+            continue
+        where = f"skysh/{module}.py:{imp.line} imports {imp.target}"
+        if imp.target not in ALLOWED.get(module, frozenset()):
+            problems.append(f"{where}: not in test_layers.ALLOWED[{module!r}]")
+        if imp.target in LAYERS and module in LAYERS and LAYERS[imp.target] >= LAYERS[module]:
+            reason = LAZY_UPWARD.get((module, imp.target))
+            if reason is None:
+                problems.append(f"{where}: layer {LAYERS[imp.target]} from layer {LAYERS[module]}, not a lower layer")
+            elif not imp.lazy:
+                problems.append(f"{where}: the known upward import ({reason}) must stay inside a function")
+    return problems
+
+
+def _source(module: str) -> str:
+    return (SKYSH / f"{module}.py").read_text(encoding="utf-8")
+
+
+def _module_level_closure(module: str) -> set[str]:
+    """The skysh modules loaded by importing ``module`` (module-level imports, followed)."""
+    seen, todo = set(), [module]
+    while todo:
+        name = todo.pop()
+        if name in seen:
+            continue
+        seen.add(name)
+        todo += [i.target for i in imports_of(_source(name))
+                 if not (i.lazy or i.type_only or i.target.startswith("ext:")) and i.target in MODULES]
+    return seen
+
+
+# --------------------------------------------------------------------------- #
+def test_every_module_has_a_layer_and_a_row():
+    assert MODULES == set(LAYERS), f"place new modules in LAYERS, drop deleted ones: {MODULES ^ set(LAYERS)}"
+    assert MODULES == set(ALLOWED), f"give new modules a row in ALLOWED: {MODULES ^ set(ALLOWED)}"
+
+
+def test_the_table_points_down():
+    """Every allowed import goes to a strictly lower layer, except the listed lazy ones."""
+    upward = [(m, d) for m, deps in ALLOWED.items() for d in deps if LAYERS[d] >= LAYERS[m]]
+    assert sorted(upward) == sorted(LAZY_UPWARD)
+
+
+@pytest.mark.parametrize("module", sorted(MODULES))
+def test_imports_follow_the_layers(module):
+    assert layer_violations(module, _source(module)) == []
+
+
+def test_the_studies_are_out_of_the_library():
+    """Issue 14: quantize imports neither runtime nor preetham, hazel neither dering, preetham nor quantize."""
+    for module, banned in {"quantize": {"runtime", "preetham", "__init__"},
+                           "hazel": {"dering", "preetham", "quantize", "__init__"}}.items():
+        targets = {i.target for i in imports_of(_source(module))}
+        assert not targets & banned, (module, targets & banned)
+        assert not any(t.startswith("ext:scipy") for t in targets), module  # the sky sampling went with the studies
+
+
+def test_the_library_never_imports_the_tools():
+    for module in sorted(MODULES):
+        external = {i.target[4:] for i in imports_of(_source(module)) if i.target.startswith("ext:")}
+        assert not external & NEVER_IN_THE_LIBRARY, (module, external & NEVER_IN_THE_LIBRARY)
+
+
+@pytest.mark.parametrize("module", RUNTIME_SIDE)
+def test_the_runtime_side_is_light_at_import(module):
+    closure = _module_level_closure(module)
+    assert "fit" not in closure, f"importing skysh.{module} loads the offline fit"
+    for name in sorted(closure):
+        heavy = {i.target[4:] for i in imports_of(_source(name))
+                 if i.target.startswith("ext:") and not (i.lazy or i.type_only)} & NOT_AT_RUNTIME_IMPORT
+        assert not heavy, f"importing skysh.{module} loads {heavy} at module level through skysh.{name}"
+
+
+# --------------------------------------------------------------------------- #
+# Negative controls: the checker sees what it must
+# --------------------------------------------------------------------------- #
+def test_negative_control_upward_imports_are_caught():
+    lazy_upward = "def f():\n    from skysh import preetham\n    return preetham\n"
+    assert any("not in test_layers.ALLOWED" in p for p in layer_violations("hazel", lazy_upward))
+    assert any("not a lower layer" in p for p in layer_violations("hazel", lazy_upward))
+    facade = "from skysh import SkySH\n"
+    assert any("imports runtime" in p for p in layer_violations("quantize", facade))
+    known_but_eager = "from skysh import coefficient_file\n"
+    assert any("must stay inside a function" in p for p in layer_violations("sunlight", known_but_eager))
+    type_only = "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from skysh.runtime import SkySH\n"
+    assert layer_violations("hazel", type_only) == []
+
+
+def test_negative_control_heavy_and_tool_imports_are_seen():
+    found = imports_of("import matplotlib.pyplot as plt\nfrom studies import hazel_study\n"
+                       "def f():\n    import colour\n")
+    assert [(i.target, i.lazy) for i in found] == [("ext:matplotlib", False), ("ext:studies", False),
+                                                   ("ext:colour", True)]
+    assert "studies" in NEVER_IN_THE_LIBRARY and "report" in NEVER_IN_THE_LIBRARY
