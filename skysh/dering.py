@@ -34,7 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from skysh import sh, shmin
-from skysh._checks import as_float_array, check_bands, check_choice, check_dirs, check_flag
+from skysh._checks import as_float_array, check_bands, check_choice, check_dirs, check_flag, short_repr
 from skysh.shmin import exact_min, min_bound
 
 __all__ = ["DeringWarning", "DERING_TARGETS", "DERING_METHODS", "MAX_DERING_BANDS", "SEED_WINDOW_SIZES",
@@ -106,6 +106,8 @@ def sinc4_window(cutoff: float, bands: int = 3) -> NDArray[np.float64]:
     """Per-band factors (N,) of the seed's eq. (6), ``(sin(pi l / w) / (pi l / w))^4`` for
     l = 0 .. ``bands`` - 1, w = ``cutoff`` > 0 (``inf``: none); in [0, 1], 0 for l >= w."""
     bands = check_bands(bands)
+    if isinstance(cutoff, (bool, np.bool_)) or not isinstance(cutoff, (int, float, np.integer, np.floating)):
+        raise ValueError(f"cutoff must be a real number > 0 (a band index, or inf), got {short_repr(cutoff)}")
     w = float(cutoff)
     if not w > 0.0:
         raise ValueError(f"cutoff must be > 0 (a band index, or inf), got {cutoff!r}")

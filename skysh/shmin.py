@@ -119,7 +119,10 @@ def _normalised(f: NDArray) -> tuple[NDArray, NDArray, NDArray]:
 def sphere_quadratic(coeffs: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:
     """A 3-band function (..., 9) (docs/conventions.md) as ``f(w) = c + g.w + w^T Q w`` on the unit
     sphere: c (...), g (..., 3) and Q (..., 3, 3) (symmetric, traceless), in its unit."""
-    m = as_float_array(coeffs, "coeffs") @ FORM_MAP
+    c = as_float_array(coeffs, "coeffs")
+    if c.ndim == 0 or c.shape[-1] != 9:
+        raise ValueError(f"coeffs must have shape (..., 9) (3 bands, docs/conventions.md order), got {c.shape}")
+    m = c @ FORM_MAP
     return m[..., 0], m[..., 1:4], m[..., 4:].reshape(m.shape[:-1] + (3, 3))
 
 

@@ -530,9 +530,6 @@ OTHER_ROWS: list[Row] = [
 DERING, SHMIN, ENGINES, QUANTIZE, EXPORT, COEFFICIENT_FILE, FIT = (
     f"owner of skysh/{name}.py" for name in ("dering", "shmin", "engines", "quantize", "export", "coefficient_file", "fit"))
 _KNOWN: dict[str, tuple[str, str]] = {
-    'dering.sinc4_window-cutoff': (DERING, 'bool text: accepted | none array: TypeError'),
-    'dering.linear_attenuation-cutoff': (DERING, 'text: accepted | none: TypeError'),
-    'shmin.sphere_quadratic-coeffs': (SHMIN, 'wrong-count scalar empty: ValueError not naming it'),
 }
 """Gaps of modules other helpers own, as measured on this table: ``"function-parameter"`` ->
 (owner, "kind kind: what happens | kind: ..."), written by running the table (``accepted``: no
