@@ -2,7 +2,10 @@
 Section 8 (e): fuzzing ``SkySH.coefficients``
 =============================================
 
-Random and adversarial calls in nine categories. The expected outcome is a finite
+Random and adversarial calls in nine categories, then the count of every bad-input
+kind the test suite feeds every public function and CLI command
+(``tests/test_input_hygiene.py``) and every corrupted coefficient file
+(``tests/test_corrupt_file.py``), run here and tallied from pytest's JUnit XML. The expected outcome is a finite
 result for a valid call and a ValueError otherwise; a TypeError is recorded (and
 counted as unexpected). Any other exception is not caught: it stops the report with
 its traceback, since it is a bug of the runtime that no table should hide.
@@ -11,11 +14,16 @@ its traceback, since it is a bug of the runtime that no table should hide.
 from __future__ import annotations
 
 import math
+import subprocess
+import sys
+import tempfile
 import time
 import warnings
+import xml.etree.ElementTree as ET
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cache
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -219,7 +227,33 @@ def compute(ctx: Context) -> dict[str, Any]:
             _tally(stats[category], examples[category], category, case, outcome)
             bar.update(1)
     return {"stats": stats, "examples": [e for v in examples.values() for e in v], "runtime_warnings": warning_count,
-            "seconds": time.perf_counter() - start}
+            "seconds": time.perf_counter() - start, "suites": suite_counts(Path(__file__).resolve().parents[2])}
+
+
+SUITES: dict[str, str] = {
+    "bad values, every public function and CLI command": "tests/test_input_hygiene.py",
+    "corrupted coefficient files": "tests/test_corrupt_file.py",
+}
+"""The test files whose cases the report counts (one row each)."""
+
+
+def suite_counts(root: Path) -> dict[str, dict[str, int]]:
+    """Run each file of :data:`SUITES` with pytest and count its cases: passed, failed, skipped, expected failures."""
+    counts = {}
+    for label, path in SUITES.items():
+        with tempfile.TemporaryDirectory() as tmp:
+            xml_path = Path(tmp) / "junit.xml"
+            subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", path,
+                            f"--junitxml={xml_path}"], cwd=root, capture_output=True, check=False, timeout=900)
+            cases = ET.parse(xml_path).getroot().iter("testcase")
+            tally = {"cases": 0, "passed": 0, "failed": 0, "skipped": 0}
+            for case in cases:
+                tally["cases"] += 1
+                kinds = {child.tag for child in case}
+                key = "failed" if kinds & {"failure", "error"} else "skipped" if "skipped" in kinds else "passed"
+                tally[key] += 1
+            counts[label] = tally
+    return counts
 
 
 def _nan_text(examples: list[str]) -> str | None:
@@ -255,3 +289,11 @@ def render(ctx: Context, s: Section, d: dict[str, Any]) -> None:
     nan_text = _nan_text(d["examples"])
     if nan_text is not None:
         s.text(nan_text)
+    suites = d["suites"]
+    s.text("**Every kind of bad input, every public function**: the test suite's table-driven cases (each asserts the "
+           "exception type and that the message names the parameter or CLI flag) and its corrupted-file cases (each "
+           "asserts one CoefficientFileError within 64 MB), run for this report:")
+    s.table(["suite", "cases", "passed", "failed", "skipped (expected failures included)"],
+            [[label, v["cases"], v["passed"], v["failed"], v["skipped"]] for label, v in suites.items()])
+    ctx.note("Bad-input cases (every public function and CLI flag) / corrupted files: passed of run",
+             " / ".join(f"{v['passed']} of {v['cases']}" for v in suites.values()), "")
