@@ -47,6 +47,7 @@ import platform
 import timeit
 from collections.abc import Callable
 
+import _timing
 import numpy as np
 
 from skysh import preetham
@@ -69,23 +70,8 @@ RUN_SECONDS: float = 0.2
 
 def interleaved_best(cases: dict[str, Callable[[], object]], repeats: int,
                      run_seconds: float = RUN_SECONDS) -> dict[str, float]:
-    """
-    Best seconds per call of every case over ``repeats`` rounds; within a round the
-    cases take turns, so a change in the machine's load hits numerator and
-    denominator alike. Each case's loop count is set once (after a warm-up) so
-    that one timed run lasts about ``run_seconds`` (at least one call).
-    """
-    timers, numbers = {}, {}
-    for name, fn in cases.items():
-        timer = timeit.Timer(fn)
-        number, elapsed = timer.autorange()  # also the warm-up
-        timers[name] = timer
-        numbers[name] = max(1, math.ceil(number * run_seconds / max(elapsed, 1e-9)))
-    best = {name: math.inf for name in cases}
-    for _ in range(repeats):
-        for name, timer in timers.items():
-            best[name] = min(best[name], timer.timeit(numbers[name]) / numbers[name])
-    return best
+    """:func:`_timing.interleaved_best` with this script's run length."""
+    return _timing.interleaved_best(cases, repeats, run_seconds)
 
 
 def emit(bench: str, bands: int, runtime_s: float, baseline: str, baseline_s: float, **extra: object) -> None:

@@ -35,6 +35,7 @@ import platform
 import timeit
 from collections.abc import Callable
 
+import _timing
 import numpy as np
 
 from skysh.runtime import SkySH
@@ -47,19 +48,10 @@ RUN_SECONDS: float = 0.2
 """Approximate length of one timed run; the loop count is chosen to reach it."""
 
 
-def interleaved_best(cases: dict[str, Callable[[], object]], repeats: int, run_seconds: float = RUN_SECONDS) -> dict[str, float]:
-    """Best seconds per call of every case over ``repeats`` rounds, the cases taking turns within a round."""
-    timers, numbers = {}, {}
-    for name, fn in cases.items():
-        timer = timeit.Timer(fn)
-        number, elapsed = timer.autorange()  # also the warm-up
-        timers[name] = timer
-        numbers[name] = max(1, math.ceil(number * run_seconds / max(elapsed, 1e-9)))
-    best = {name: math.inf for name in cases}
-    for _ in range(repeats):
-        for name, timer in timers.items():
-            best[name] = min(best[name], timer.timeit(numbers[name]) / numbers[name])
-    return best
+def interleaved_best(cases: dict[str, Callable[[], object]], repeats: int,
+                     run_seconds: float = RUN_SECONDS) -> dict[str, float]:
+    """:func:`_timing.interleaved_best` with this script's run length."""
+    return _timing.interleaved_best(cases, repeats, run_seconds)
 
 
 def emit(bench: str, runtime_s: float, baseline: str, baseline_s: float, speedup: bool = False) -> None:

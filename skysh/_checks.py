@@ -183,3 +183,27 @@ def check_flag(value: object, name: str) -> bool:
     if type(value) is np.bool_:
         return bool(value)
     raise TypeError(f"{name} must be a bool (True or False), got {short_repr(value)} of type {type(value).__name__}")
+
+
+REAL_SCALAR_TYPES: frozenset[type] = frozenset(
+    {int, np.float64, np.float32, np.float16, np.int64, np.int32, np.int16, np.int8,
+     np.uint64, np.uint32, np.uint16, np.uint8}
+)
+"""Scalar types (besides float) that take the per-frame scalar paths; ``bool`` is not a number here."""
+
+
+def real_scalar(value: Any) -> float | None:
+    """``value`` as a Python float when it is one real scalar (float, int, numpy real, 0-d array), else None.
+
+    None sends the call to the array path, which validates and names the parameter
+    (also for ints too large for a float, text and booleans). Cheap: a type lookup.
+    """
+    kind = type(value)
+    if kind is float:
+        return value
+    if kind in REAL_SCALAR_TYPES or (kind is np.ndarray and value.ndim == 0 and value.dtype.kind in "iuf"):
+        try:
+            return float(value)
+        except OverflowError:  # an int beyond float range: the array path refuses it by name
+            return None
+    return None

@@ -55,6 +55,7 @@ from skysh._checks import (
     check_scalar,
     check_size,
     number_text,
+    real_scalar,
     short_repr,
 )
 from skysh.preetham import _luminance_scale
@@ -104,30 +105,6 @@ def _rotation_factors(phi: NDArray[np.float64], bands: int) -> NDArray[np.float6
         np.multiply(rot[bands + m - 1], c1, out=rot[bands + m])
         rot[bands + m] += rot[m - 1] * s1  # sin(m a) = sin((m-1) a) cos a + cos((m-1) a) sin a
     return rot.T
-
-
-_REAL_SCALAR_TYPES: frozenset[type] = frozenset(
-    {int, np.float64, np.float32, np.float16, np.int64, np.int32, np.int16, np.int8,
-     np.uint64, np.uint32, np.uint16, np.uint8}
-)
-"""Scalar types (besides float) that take the scalar fast path; ``bool`` is not a number here."""
-
-
-def _real_scalar(value: Any) -> float | None:
-    """``value`` as a Python float when it is one real scalar (float, int, numpy real, 0-d array), else None.
-
-    None sends the call to the array path, which validates and names the parameter
-    (also for ints too large for a float, text and booleans).
-    """
-    kind = type(value)
-    if kind is float:
-        return value
-    if kind in _REAL_SCALAR_TYPES or (kind is np.ndarray and value.ndim == 0 and value.dtype.kind in "iuf"):
-        try:
-            return float(value)
-        except OverflowError:  # an int beyond float range: the array path refuses it by name
-            return None
-    return None
 
 
 class _Plan:
@@ -293,7 +270,7 @@ class SkySH:
         albedo = None if type(ground_albedo) is float and ground_albedo == 0.0 else lights.check_albedo(ground_albedo)
         if colourspace is not None and not isinstance(colourspace, str):  # before any work, naming it
             raise ValueError(f"colourspace must be None or a colour-science RGB colourspace name, got {short_repr(colourspace)}")
-        ts, t, phi = _real_scalar(sun_zenith), _real_scalar(turbidity), _real_scalar(sun_azimuth)
+        ts, t, phi = real_scalar(sun_zenith), real_scalar(turbidity), real_scalar(sun_azimuth)
         scalar = ts is not None and t is not None and phi is not None
         if sun or albedo is not None:
             frame = (ts, t, phi) if scalar else (sun_zenith, turbidity, sun_azimuth)
@@ -481,7 +458,7 @@ class SkySH:
             raise ValueError("sun_light needs the coefficient file's sun table (format 3); this SkyTable has none")
         if colourspace is not None and not isinstance(colourspace, str):
             raise ValueError(f"colourspace must be None or a colour-science RGB colourspace name, got {short_repr(colourspace)}")
-        ts, t, phi = _real_scalar(sun_zenith), _real_scalar(turbidity), _real_scalar(sun_azimuth)
+        ts, t, phi = real_scalar(sun_zenith), real_scalar(turbidity), real_scalar(sun_azimuth)
         if ts is not None and t is not None and phi is not None:
             direction, rgb = self._sun.light(ts, t, phi)  # Python floats: its fast path, the same refusals
         else:
@@ -543,7 +520,7 @@ class SkySH:
     def _frame_and_dirs(self, dirs: ArrayLike, name: str, bands: Any, **sun: Any) -> NDArray[np.float64]:
         """Checked directions of :meth:`radiance` / :meth:`irradiance_at`; the sun's parameters must be scalars."""
         for key, value in sun.items():
-            if _real_scalar(value) is None:
+            if real_scalar(value) is None:
                 check_scalar(value, key)  # names the parameter: not a number, not finite, or an array
         bands = check_bands(bands, high=self.bands)
         return check_dirs(dirs, name, per_point=bands * bands)

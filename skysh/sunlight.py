@@ -65,7 +65,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from skysh import poly
-from skysh._checks import as_float_array, check_range, check_size, number_text
+from skysh._checks import as_float_array, check_range, check_size, number_text, real_scalar
 from skysh._npz import CoefficientFileError
 
 __all__ = [
@@ -119,25 +119,6 @@ SUN_MAX_LN: float = 100.0
 
 exp then lies in [e^-100, e^100] = [3.7e-44, 2.7e43] lux: never 0, inf or NaN, also on the
 horizon. A fit's largest sum is far below (``tools/fit_sky.py`` prints it with the fit)."""
-
-_REAL_SCALAR_TYPES: frozenset[type] = frozenset(
-    {int, np.float64, np.float32, np.float16, np.int64, np.int32, np.int16, np.int8,
-     np.uint64, np.uint32, np.uint16, np.uint8}
-)
-"""Scalar types (besides float) that take the fast path; ``bool`` is not a number here (as skysh.runtime)."""
-
-
-def _real(value: Any) -> float | None:
-    """``value`` as a Python float when it is one real scalar, else None (the batch path checks and names it)."""
-    kind = type(value)
-    if kind is float:
-        return value
-    if kind in _REAL_SCALAR_TYPES or (kind is np.ndarray and value.ndim == 0 and value.dtype.kind in "iuf"):
-        try:
-            return float(value)
-        except OverflowError:
-            return None
-    return None
 
 
 def air_mass(sun_zenith: ArrayLike) -> NDArray[np.float64]:
@@ -291,7 +272,7 @@ class SunLight:
             For a parameter outside its range (named, with the range), NaN or
             inf, text, booleans, or shapes that do not broadcast.
         """
-        ts, t = _real(sun_zenith), _real(turbidity)
+        ts, t = real_scalar(sun_zenith), real_scalar(turbidity)
         if ts is not None and t is not None:
             error = _domain_error(ts, t)
             if error is not None:
@@ -309,7 +290,7 @@ class SunLight:
         outside the gamut turns slightly negative. Arguments, shapes and
         refusals as :meth:`xyz`; two Python floats take the fast path.
         """
-        ts, t = _real(sun_zenith), _real(turbidity)
+        ts, t = real_scalar(sun_zenith), real_scalar(turbidity)
         if ts is not None and t is not None:
             if not (_ZMIN <= ts <= _ZMAX and _TMIN <= t <= _TMAX):
                 raise _domain_error(ts, t)  # type: ignore[misc]
@@ -343,7 +324,7 @@ class SunLight:
         ValueError
             As :meth:`xyz`; ``sun_azimuth`` NaN, inf or not a number.
         """
-        ts, t, phi = _real(sun_zenith), _real(turbidity), _real(sun_azimuth)
+        ts, t, phi = real_scalar(sun_zenith), real_scalar(turbidity), real_scalar(sun_azimuth)
         if ts is not None and t is not None and phi is not None:
             if not math.isfinite(phi):
                 raise ValueError(f"sun_azimuth must be finite (radians), got {phi!r}")

@@ -1,0 +1,38 @@
+"""
+Timing shared by the benchmark scripts
+======================================
+
+-   :func:`interleaved_best`: best seconds per call of several cases measured in
+    turns, so a change in the shared machine's load hits a case and its baseline alike.
+
+The scripts run as ``python benchmarks/bench_x.py`` (this folder is then first on
+``sys.path``), so they import this module as ``_timing``.
+"""
+
+from __future__ import annotations
+
+import math
+import timeit
+from collections.abc import Callable
+
+__all__ = ["interleaved_best"]
+
+
+def interleaved_best(cases: dict[str, Callable[[], object]], repeats: int, run_seconds: float) -> dict[str, float]:
+    """
+    Best seconds per call of every case over ``repeats`` rounds; within a round the
+    cases take turns, so a change in the machine's load hits numerator and
+    denominator alike. Each case's loop count is set once (after a warm-up) so
+    that one timed run lasts about ``run_seconds`` (at least one call).
+    """
+    timers, numbers = {}, {}
+    for name, fn in cases.items():
+        timer = timeit.Timer(fn)
+        number, elapsed = timer.autorange()  # also the warm-up
+        timers[name] = timer
+        numbers[name] = max(1, math.ceil(number * run_seconds / max(elapsed, 1e-9)))
+    best = {name: math.inf for name in cases}
+    for _ in range(repeats):
+        for name, timer in timers.items():
+            best[name] = min(best[name], timer.timeit(numbers[name]) / numbers[name])
+    return best
