@@ -16,26 +16,23 @@ The issue's budgets, each printed beside its measurement:
     20 ms: a subprocess that loads the runtime, then times ``from skysh import dering``
     and one call (best of ``--fresh`` processes).
 
-Single-call cases take turns within each repeat (best of ``--repeats`` runs of
-``--number`` calls after a warm-up, ``time.perf_counter``), so the ratios compare like
+Single-call cases take turns within each repeat (best of ``--repeats`` runs of about
+``--seconds`` each after a warm-up, :func:`_timing.interleaved_best`), so the ratios compare like
 with like on a loaded machine. One JSON line per measurement after a markdown table.
 
-Run: ``PYTHONPATH=. python benchmarks/bench_dering.py [--repeats 7] [--number 200] [--batch 10000]``.
+Run: ``PYTHONPATH=. python benchmarks/bench_dering.py [--repeats 7] [--seconds 0.05] [--batch 10000]``.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import math
 import subprocess
 import sys
-import time
 import warnings
-from collections.abc import Callable
-from typing import Any
 
 import numpy as np
+from _timing import interleaved_best
 
 from skysh import SkySH, dering, sh
 
@@ -59,20 +56,6 @@ print(time.perf_counter() - t0)
 """The fresh-process case: the runtime is loaded first (its own cost is not deringing's)."""
 
 
-def interleaved_best(cases: dict[str, Callable[[], Any]], repeats: int, number: int) -> dict[str, float]:
-    """Best mean seconds per call of every case, the cases taking turns within each repeat."""
-    for fn in cases.values():
-        fn()
-    best = {name: math.inf for name in cases}
-    for _ in range(repeats):
-        for name, fn in cases.items():
-            t0 = time.perf_counter()
-            for _ in range(number):
-                fn()
-            best[name] = min(best[name], (time.perf_counter() - t0) / number)
-    return best
-
-
 def lights(rng: np.random.Generator, n: int, bands: int = 3) -> np.ndarray:
     """(n, K, 3) HDR delta lights, one per channel: they need a window."""
     d = rng.normal(size=(n, 3, 3))
@@ -90,7 +73,7 @@ def fresh_call(processes: int) -> float:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description="Deringing cost against the runtime coefficients call")
     parser.add_argument("--repeats", type=int, default=7)
-    parser.add_argument("--number", type=int, default=200)
+    parser.add_argument("--seconds", type=float, default=0.05, help="length of one timed run of a case")
     parser.add_argument("--batch", type=int, default=10_000)
     parser.add_argument("--fresh", type=int, default=5)
     args = parser.parse_args(argv)
@@ -106,16 +89,16 @@ def main(argv: list[str] | None = None) -> int:
     cases = {"SkySH.coefficients": ref, "dering(sky), no window needed": lambda: dering.dering(filtered),
              "dering(sky), window needed": lambda: dering.dering(raw),
              "dering(3 HDR lights), window needed": lambda: dering.dering(three)}
-    times = interleaved_best(cases, args.repeats, args.number)
+    times = interleaved_best(cases, args.repeats, args.seconds)
     slow = interleaved_best({"dering(7-band sky)": lambda: dering.dering(sky7),
-                             "dering(7-band HDR lights)": lambda: dering.dering(lights7)}, args.repeats, 5)
+                             "dering(7-band HDR lights)": lambda: dering.dering(lights7)}, args.repeats, args.seconds)
     batch3 = lights(rng, args.batch)
     batch7 = np.concatenate([lights(rng, 50, 7), np.asarray(sky.coefficients(
         rng.uniform(0, 1.5, 50), rng.uniform(2.5, 6, 50), rng.uniform(0, 6, 50), bands=7, gibbs=False))])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", dering.DeringWarning)
-        per3 = interleaved_best({"b": lambda: dering.dering(batch3)}, 3, 1)["b"] / len(batch3)
-        per7 = interleaved_best({"b": lambda: dering.dering(batch7)}, 2, 1)["b"] / len(batch7)
+        per3 = interleaved_best({"b": lambda: dering.dering(batch3)}, 3, 0.0)["b"] / len(batch3)
+        per7 = interleaved_best({"b": lambda: dering.dering(batch7)}, 2, 0.0)["b"] / len(batch7)
     first = fresh_call(args.fresh)
     t_ref = times["SkySH.coefficients"]
     rows = [{"case": name, "seconds": t, "ratio": t / t_ref,

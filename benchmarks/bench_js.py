@@ -74,14 +74,15 @@ int main(int argc, char **argv) {
 #ifdef SKYSH_ENGINE_COUNT
             if (engine) {
                 skysh_real e[SKYSH_ENGINE_COUNT];
-                skysh_engine_coefficients(in[3 * i], in[3 * i + 1], in[3 * i + 2], gibbs, dering, e);
+                skysh_engine_coefficients(in[3 * i], in[3 * i + 1], in[3 * i + 2], gibbs, dering, 0, NULL, SKYSH_BY_INTENT, e);
                 for (k = 0; k < SKYSH_ENGINE_COUNT; ++k) check += e[k];
                 continue;
             }
 #endif
             {
                 skysh_real out[SKYSH_COUNT][3];
-                skysh_coefficients(in[3 * i], in[3 * i + 1], in[3 * i + 2], gibbs, dering, irradiance, out);
+                skysh_coefficients(in[3 * i], in[3 * i + 1], in[3 * i + 2], gibbs, dering, irradiance, 0, NULL,
+                                   SKYSH_BY_INTENT, out);
                 for (k = 0; k < SKYSH_COUNT; ++k)
                     for (c = 0; c < 3; ++c) check += out[k][c];
             }

@@ -49,6 +49,7 @@ __all__ = [
     "check_choice",
     "number_text",
     "short_repr",
+    "read_only",
 ]
 
 MAX_ARRAY_ELEMENTS: int = 1 << 28
@@ -183,6 +184,12 @@ def check_flag(value: object, name: str) -> bool:
     if type(value) is np.bool_:
         return bool(value)
     raise TypeError(f"{name} must be a bool (True or False), got {short_repr(value)} of type {type(value).__name__}")
+
+
+def read_only(*arrays: NDArray) -> None:
+    """Mark arrays read-only: the cached tables a module hands out, so no caller can change them for the next."""
+    for array in arrays:
+        array.flags.writeable = False
 
 
 REAL_SCALAR_TYPES: frozenset[type] = frozenset(

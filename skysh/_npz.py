@@ -109,8 +109,9 @@ class Member:
     offset: int
 
 
-def directory(data: bytes, known: tuple[str, ...]) -> tuple[dict[str, Member], int]:
-    """The central directory's entries (by name, in file order) and its offset: only ``known`` names, none twice."""
+def _end_record(data: bytes) -> tuple[int, int, int]:
+    """(member count, directory size, directory offset) of the zip end record, which must close the file
+    and describe a one-disk directory just before it."""
     if len(data) < _END.size:
         raise CoefficientFileError(f"{NOT_NPZ}: {len(data)} bytes, shorter than a zip end record")
     sig, disk, start_disk, here, count, size, offset, comment = _END.unpack_from(data, len(data) - _END.size)
@@ -118,9 +119,14 @@ def directory(data: bytes, known: tuple[str, ...]) -> tuple[dict[str, Member], i
         raise CoefficientFileError(f"{NOT_NPZ}: no zip end record at its end")
     if disk or start_disk or here != count or offset + size != len(data) - _END.size:
         raise CoefficientFileError(f"{NOT_NPZ}: its zip end record does not describe a directory just before it")
+    return count, size, offset
+
+
+def _entries(data: bytes, offset: int, size: int, most: int) -> tuple[list[Member], int]:
+    """At most ``most`` central directory entries from ``offset``, and the position after the last one read."""
     entries: list[Member] = []
     position = offset
-    while position < offset + size and len(entries) < max(count, len(known)) and len(entries) < _MAX_LISTED:
+    while position < offset + size and len(entries) < most:
         if position + _CENTRAL.size > offset + size:
             raise CoefficientFileError(f"{NOT_NPZ}: its zip directory is cut short")
         fields = _CENTRAL.unpack_from(data, position)
@@ -130,6 +136,13 @@ def directory(data: bytes, known: tuple[str, ...]) -> tuple[dict[str, Member], i
         name = data[position + _CENTRAL.size : name_end].decode("ascii", errors="replace")
         entries.append(Member(name, fields[3], fields[4], fields[7], fields[8], fields[9], fields[16]))
         position = name_end + fields[11] + fields[12]
+    return entries, position
+
+
+def directory(data: bytes, known: tuple[str, ...]) -> tuple[dict[str, Member], int]:
+    """The central directory's entries (by name, in file order) and its offset: only ``known`` names, none twice."""
+    count, size, offset = _end_record(data)
+    entries, position = _entries(data, offset, size, min(max(count, len(known)), _MAX_LISTED))
     names = [entry.name for entry in entries]
     unknown = sorted(set(names) - set(known))
     if count > len(known) or unknown:

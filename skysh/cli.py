@@ -159,8 +159,8 @@ def _add_sun(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--lon", type=_finite, metavar="DEG", help="longitude, degrees, [-180, 180], positive East")
     group.add_argument("--time", metavar="ISO8601", help="time with a UTC offset, e.g. 2024-06-21T12:00:00+02:00 or ...Z; the "
                        "sun must be above the horizon")
-    parser.add_argument("--turbidity", type=_finite, required=True, metavar="T", help="atmospheric turbidity, [2.5, 6] (the "
-                        "fitted domain)")
+    parser.add_argument("--turbidity", type=_finite, required=True, metavar="T",
+                        help=f"atmospheric turbidity, {_turbidity_range()} (the fitted domain)")
 
 
 def _add_lights(parser: argparse.ArgumentParser) -> None:
@@ -169,6 +169,34 @@ def _add_lights(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--ground-albedo", type=_albedo, default=0.0, metavar="A|R,G,B", help="a Lambertian ground of this "
                         "albedo (one number or R,G,B in the output colourspace, each in [0, 1]) below the horizon, lit by the "
                         "sky (and the sun with --sun); default 0, a black ground")
+
+
+def _add_export_parser(commands: Any) -> None:
+    """``skysh export``: the tables and evaluation functions (skysh.export), the sun and the ground included."""
+    export = commands.add_parser(
+        "export", help="polynomial tables and an evaluation function in C, GLSL, HLSL, JSON or JavaScript",
+        description="Write the fitted polynomial tables and a self-contained function skysh_coefficients"
+        "(sun_zenith_rad, turbidity, sun_azimuth_rad, gibbs, dering, irradiance, sun, ground_albedo, out) that "
+        f"reproduces the runtime with its sun and ground (radians, turbidity {_turbidity_range()}; output cd/m^2, linear sRGB, "
+        + _CONVENTION + "), and skysh_sun_light(sun_zenith_rad, turbidity, sun_azimuth_rad, direction, rgb), the sun "
+        "as a directional light (lux); with --engine also skysh_engine_coefficients(...) returning that engine's "
+        "numbers. C: a header with double tables (--c-real float for float); GLSL and HLSL: float32 tables and "
+        "arithmetic; JSON: float64 tables and the algorithm in words; js: an ES module coefficients(sunZenith, "
+        "turbidity, sunAzimuth, options) with options {bands, gibbs, irradiance, dering, sun, groundAlbedo, engine} "
+        "and the Python defaults, and sunLight(sunZenith, turbidity, sunAzimuth).",
+    )
+    export.add_argument("--format", choices=("c", "glsl", "hlsl", "json", "js"), required=True, help="language of the file: c (a "
+                        "header, e.g. sky_sh.h: #include it, link with -lm), glsl, hlsl, json, or js (an ES module, the "
+                        "per-frame runtime for browsers, with every engine as a per-call option; its TypeScript declarations "
+                        "are written beside it: sky.d.mts for sky.mjs)")
+    export.add_argument("--out", type=Path, required=True, metavar="FILE", help="file to write ('-' for standard output)")
+    export.add_argument("--engine", metavar="NAME", default=None, help="c, glsl, hlsl: the generated function returns that "
+                        "engine's numbers (docs/engines.md); js takes the engine as a per-call option instead")
+    export.add_argument("--bands", type=_bands, default=None, metavar="N", help="SH bands N, [1, 7]; default 3 (js: all 7, "
+                        "chosen per call); deringing needs 3")
+    export.add_argument("--c-real", choices=("double", "float"), default="double", help="C only: floating type of the tables and "
+                        "arithmetic (default double)")
+    export.set_defaults(handler=_cmd_export)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -206,8 +234,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_lights(coeffs)
     coeffs.add_argument("--sun-light", action="store_true", help="print the sun as a directional light instead: the unit vector "
                         "towards it (in the --up or --engine frame) and its RGB illuminance at normal incidence, lux (times "
-                        "--exposure, or the --normalise factor of the coefficients this command line would print); light the "
-                        "scene with it and SH without --sun")
+                        "--exposure, or the --normalise factor of the coefficients this command line would print); with "
+                        "--engine also the engine's light colour and intensity (--format snippet: code setting the engine's "
+                        "light; skysh.engine_sun); light the scene with it and SH without --sun")
     coeffs.add_argument("--up", choices=("z", "y"), default="z", help="frame of the output: z (default, skysh's Z up) or y "
                         "(right-handed Y up as glTF: zenith +Y, +X stays, +Y becomes -Z; skysh.sh.to_y_up)")
     coeffs.add_argument("--format", choices=COEFF_FORMATS, default="table", help="table (default; labelled rows, units), json, "
@@ -221,28 +250,7 @@ def build_parser() -> argparse.ArgumentParser:
     units.add_argument("--normalise", action="store_true", help=_NORMALISE_HELP)
     coeffs.set_defaults(handler=_cmd_coeffs)
 
-    export = commands.add_parser(
-        "export", help="polynomial tables and an evaluation function in C, GLSL, HLSL or JSON",
-        description="Write the fitted polynomial tables and a self-contained function skysh_coefficients"
-        "(sun_zenith_rad, turbidity, sun_azimuth_rad, gibbs, dering, irradiance, out) that reproduces the runtime "
-        "(radians, turbidity [2.5, 6]; output cd/m^2, linear sRGB, " + _CONVENTION + "); with --engine also "
-        "skysh_engine_coefficients(...) returning that engine's numbers. C: a header with double tables "
-        "(--c-real float for float); GLSL and HLSL: float32 tables and arithmetic; JSON: float64 tables and "
-        "the algorithm in words; js: an ES module coefficients(sunZenith, turbidity, sunAzimuth, options) "
-        "with options {bands, gibbs, irradiance, dering, engine} and the Python defaults.",
-    )
-    export.add_argument("--format", choices=("c", "glsl", "hlsl", "json", "js"), required=True, help="language of the file: c (a "
-                        "header, e.g. sky_sh.h: #include it, link with -lm), glsl, hlsl, json, or js (an ES module, the "
-                        "per-frame runtime for browsers, with every engine as a per-call option; its TypeScript declarations "
-                        "are written beside it: sky.d.mts for sky.mjs)")
-    export.add_argument("--out", type=Path, required=True, metavar="FILE", help="file to write ('-' for standard output)")
-    export.add_argument("--engine", metavar="NAME", default=None, help="c, glsl, hlsl: the generated function returns that "
-                        "engine's numbers (docs/engines.md); js takes the engine as a per-call option instead")
-    export.add_argument("--bands", type=_bands, default=None, metavar="N", help="SH bands N, [1, 7]; default 3 (js: all 7, "
-                        "chosen per call); deringing needs 3")
-    export.add_argument("--c-real", choices=("double", "float"), default="double", help="C only: floating type of the tables and "
-                        "arithmetic (default double)")
-    export.set_defaults(handler=_cmd_export)
+    _add_export_parser(commands)
 
     render = commands.add_parser(
         "render", help="PNG of the true sky, its SH reconstruction and the irradiance",
@@ -308,7 +316,7 @@ def _sun_angles(args: argparse.Namespace) -> _Sun:
         for flag, value, (low, high) in (("--lat", args.lat, sun.LATITUDE_RANGE), ("--lon", args.lon, sun.LONGITUDE_RANGE)):
             if not low <= value <= high:
                 raise _UsageError(f"{flag} must lie in [{low:g}, {high:g}] degrees, got {number_text(value)}")
-        utc = sun._utc(args.time, name="--time")  # a ValueError naming --time
+        utc = sun.as_utc(args.time, name="--time")  # a ValueError naming --time
         zenith, azimuth = (float(v) for v in sun.position_unchecked(args.lat, args.lon, utc))
         if zenith > sun.HORIZON_ZENITH:
             raise _UsageError(f"--time {args.time}: the sun is below the horizon at --lat {number_text(args.lat)} --lon "
@@ -324,6 +332,13 @@ def _sun_angles(args: argparse.Namespace) -> _Sun:
     if not low <= args.sun_zenith <= high:
         raise _UsageError(f"--sun-zenith must lie in [{low:g}, {high:g}] degrees, got {number_text(args.sun_zenith)}")
     return _Sun(args.sun_zenith, 0.0 if args.sun_azimuth is None else args.sun_azimuth, {}, given=True)
+
+
+def _turbidity_range() -> str:
+    """The fitted turbidity domain as help text, "[low, high]" (from :data:`skysh.poly.TURBIDITY_DOMAIN`)."""
+    from skysh.poly import TURBIDITY_DOMAIN
+
+    return "[{:g}, {:g}]".format(*TURBIDITY_DOMAIN)
 
 
 def _check_turbidity(turbidity: float) -> None:
@@ -391,15 +406,17 @@ def _cmd_coeffs(args: argparse.Namespace) -> int:
         _check_engine_options(args, sky)
     elif args.format == "snippet":
         raise _UsageError("--format snippet needs --engine NAME (the snippet is written in that engine's language)")
-    if args.sun_light and (args.sun or args.format == "snippet"):
-        raise _UsageError(f"--sun-light does not go with {'--sun' if args.sun else '--format snippet'}: it prints the "
-                          "sun as a directional light, to use with SH without the sun (else the sun counts twice)")
+    if args.sun_light and args.sun:
+        raise _UsageError("--sun-light does not go with --sun: it prints the sun as a directional light, to use with SH "
+                          "without the sun (else the sun counts twice)")
     diffuse = args.irradiance or args.engine is not None
     gibbs = not diffuse if args.gibbs is None else args.gibbs
     dering = diffuse if args.dering is None else args.dering
+    # engines light diffusely: their 3-band presets take the certified irradiance table as the exports do
+    table = True if args.engine is not None and args.bands == 3 and not gibbs and dering and sky.has_irradiance_table else None
     c = sky.coefficients(sun.zenith, args.turbidity, sun.azimuth, bands=args.bands, gibbs=gibbs, dering=dering,
                          irradiance=args.irradiance, colourspace=args.colourspace, sun=args.sun,
-                         ground_albedo=args.ground_albedo)
+                         ground_albedo=args.ground_albedo, irradiance_table=table)
     if args.up == "y":
         c = sh.to_y_up(c)
     units = "cd/m^2*sr" if args.irradiance else "cd/m^2"

@@ -198,7 +198,9 @@ def format_sun_light(direction: ArrayLike, rgb: ArrayLike, fmt: str, info: dict[
     fmt
         ``"table"`` (commented header and two labelled rows), ``"json"``, ``"csv"``
         (``quantity,x_or_R,y_or_G,z_or_B``), ``"glsl"``/``"hlsl"`` (two float32
-        constants) or ``"c"`` (two double arrays).
+        constants), ``"c"`` (two double arrays), or with an engine ``"snippet"``
+        (:func:`skysh.engine_sun.sun_snippet`); with an engine, table, json and csv
+        add the engine's light colour and intensity (:func:`skysh.engine_sun.sun_preset`).
     info
         Parameters to record (units, colourspace, ...); the quantity and the frame are added.
     engine, up
@@ -212,12 +214,18 @@ def format_sun_light(direction: ArrayLike, rgb: ArrayLike, fmt: str, info: dict[
     from skysh import sh
     from skysh._checks import as_float_array, check_choice
 
-    check_choice(fmt, "fmt", ("table", "json", "csv", "glsl", "hlsl", "c"))
+    check_choice(fmt, "fmt", ("table", "json", "csv", "glsl", "hlsl", "c") + (("snippet",) if engine else ()))
     d = as_float_array(direction, "direction")
+    light: dict[str, Any] = {}
     if engine is not None:
-        from skysh.engines import ENGINE_FRAMES
+        from skysh.engine_sun import SUN_UNITS, sun_preset, sun_snippet
 
-        d, frame = ENGINE_FRAMES[engine] @ d, f"the {engine} frame (skysh.engines.sun_direction; docs/engines.md)"
+        if fmt == "snippet":
+            return sun_snippet(d, rgb, engine)
+        preset = sun_preset(d, rgb, engine)
+        light = {"engine_light_colour": [float(v) for v in preset.colour], "engine_light_intensity": preset.intensity,
+                 "engine_light_intensity_unit": SUN_UNITS[engine] + " (skysh.engine_sun)"}
+        d, frame = preset.direction, f"the {engine} frame (skysh.engines.sun_direction; docs/engines.md)"
     elif up == "y":
         d, frame = sh.Y_UP_MATRIX @ d, "Y up (zenith +Y), right-handed as glTF: skysh's +X stays, +Y becomes -Z"
     else:
@@ -226,10 +234,16 @@ def format_sun_light(direction: ArrayLike, rgb: ArrayLike, fmt: str, info: dict[
             "RGB illuminance at normal incidence; the light shines along minus the vector", "frame": frame, **info}
     dl, el = [float(v) for v in d], [float(v) for v in np.asarray(rgb)]
     if fmt == "json":
-        return json.dumps({"sun_direction": dl, "sun_illuminance": el, **info}, indent=1)
+        return json.dumps({"sun_direction": dl, "sun_illuminance": el, **light, **info}, indent=1)
     if fmt == "csv":
-        return "quantity,x_or_R,y_or_G,z_or_B\n" + "\n".join(
-            f"{name}," + ",".join(map(repr, v)) for name, v in (("sun_direction", dl), ("sun_illuminance", el)))
+        lines = [("sun_direction", dl), ("sun_illuminance", el)]
+        if light:
+            lines += [("engine_light_colour", light["engine_light_colour"]),
+                      ("engine_light_intensity", [light["engine_light_intensity"]])]
+        return "quantity,x_or_R,y_or_G,z_or_B\n" + "\n".join(f"{name}," + ",".join(map(repr, v)) for name, v in lines)
+    info = {**info, **{key: value for key, value in light.items() if key != "engine_light_colour"}}
+    if light:
+        info["engine_light_colour"] = " ".join(f"{v:.9g}" for v in light["engine_light_colour"])
     context = [f"{key}: {value}" for key, value in info.items()]
     if fmt == "table":
         rows = [f"{'direction':>12} " + " ".join(f"{v:>15.9g}" for v in dl),

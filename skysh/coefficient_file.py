@@ -2,9 +2,10 @@
 The versioned coefficient file
 ==============================
 
-The fitted polynomial tables of the sky's SH coefficients (Habel 2008, eq. 1)
-and of the sun's direct illuminance (Preetham et al. 1999, appendix), their
-conventions and their measured accuracy, in one ``.npz`` file that the runtime
+The fitted polynomial tables of the sky's SH coefficients (Habel 2008, eq. 1),
+of the sun's direct illuminance (Preetham et al. 1999, appendix) and of the
+sky's certified non-negative 3-band irradiance (issue 18, ``docs/irradiance.md``),
+their conventions and measured accuracy, in one ``.npz`` file that the runtime
 loads and checks. Loading is the one place where untrusted bytes enter skysh,
 so :func:`read` accepts exactly what :func:`write` produces and refuses
 everything else with one :class:`CoefficientFileError`, at a bounded cost.
@@ -17,7 +18,7 @@ everything else with one :class:`CoefficientFileError`, at a bounded cost.
 -   :class:`CoefficientFileError`: raised for a file that does not match.
 -   :func:`zonal_half_layout`: the stored coefficient order (m >= 0 only).
 
-File layout (:data:`FORMAT_VERSION` 3)
+File layout (:data:`FORMAT_VERSION` 4)
 --------------------------------------
 A zip archive (an ``.npz`` that :func:`numpy.load` reads) of stored
 (uncompressed) ``.npy`` members in the order of :data:`MEMBERS`: all of
@@ -39,9 +40,12 @@ content has exactly one file:
 ``<name>_table.npy``, ``<name>_degrees.npy`` (each table of :data:`TABLES`)
     The same layout, '<f8' (n_terms, rows, 3) and '<i8' (groups, 2), rows
     grouped as ``zonal_half_layout(groups)``; what the numbers mean is the
-    table's metadata block. Today one table, ``sun`` (required): one group, one
-    row, ln X, ln Y, ln Z of the sun's direct normal illuminance in lux
-    (:data:`skysh.sunlight.SUN_BASIS`; :mod:`skysh.sunlight` evaluates it).
+    table's metadata block. Both required: ``sun``, one group, one row, ln X,
+    ln Y, ln Z of the sun's direct normal illuminance in lux
+    (:data:`skysh.sunlight.SUN_BASIS`; :mod:`skysh.sunlight` evaluates it);
+    ``irradiance``, three groups (bands), six rows, the sky's form of the
+    constrained 3-band irradiance (:data:`IRRADIANCE_BASIS`), its block recording
+    the objective and the non-negativity certificate (:attr:`TableSpec.recorded`).
 ``metadata.npy``
     '|u1' (n,): a JSON object as ASCII bytes in canonical form (sorted keys,
     no spaces, \\u escapes, no NaN): conventions, grid, versions, measured
@@ -51,30 +55,24 @@ content has exactly one file:
     ``degrees``, the file's ``colourspace``, its :attr:`TableSpec.matrices`
     (the sun's ``rgb_from_xyz``: the XYZ -> linear RGB matrix of the file's
     colourspace, so the runtime needs no colour library) and the fit's errors.
-
-Adding a table (issue 18's irradiance table, say) is one more
-:class:`TableSpec` in :data:`TABLES` (``required=False`` keeps the version 3
-files written before it readable): its members, size bounds, hash, writer and
-every check follow from it, with no new version.
+A further table is one more :class:`TableSpec`: members, bounds, hash, writer
+and checks follow from it.
 
 What :func:`read` checks, in this order
 ---------------------------------------
-1.  A regular file (``os.stat``, then ``fstat`` of a descriptor opened
-    non-blocking: a FIFO cannot hang) of at most :data:`MAX_FILE_BYTES`, read
-    whole with a bounded read.
-2.  The zip directory: only members of :data:`MEMBERS`, none twice, each
-    declaring at most its :data:`MAX_MEMBER_BYTES`, before any is read.
+1.  A regular file (``os.stat``, then ``fstat`` of a descriptor opened non-blocking: a FIFO
+    cannot hang) of at most :data:`MAX_FILE_BYTES`, read whole with a bounded read.
+2.  The zip directory: only members of :data:`MEMBERS`, none twice, each declaring at most
+    its :data:`MAX_MEMBER_BYTES`, before any is read.
 3.  ``format`` and ``format_version`` (the only members ever inflated, bounded
     by their declared sizes, for the compressed version-1 files): versions 1
-    and 2 (:data:`RETIRED_VERSIONS`) and unknown ones refused by name; then
+    to 3 (:data:`RETIRED_VERSIONS`) and unknown ones refused by name; then
     every required member present.
-4.  Every member stored, its CRC-32, its ``.npy`` header (exact dtype, C order,
-    a byte count equal to its shape's); ``allow_pickle`` is never used.
-5.  The metadata: ASCII, a JSON object, canonical.
-6.  :meth:`SkyTable.validate`: shapes, degrees, finite values within each
-    table's bounds, the layout's zeros, the runtime fields and table blocks.
-7.  The content hash (any change to any number or metadata field is refused).
-8.  The file equals, byte for byte, what :func:`write` makes of its content.
+4.  Every member stored, its CRC-32, its ``.npy`` header (exact dtype, C order, a byte count
+    equal to its shape's); ``allow_pickle`` is never used. 5. The metadata: ASCII, JSON, canonical.
+6.  :meth:`SkyTable.validate`: shapes, degrees, bounds, the layout's zeros, fields and blocks.
+7.  The content hash (any change to any number or metadata field is refused). 8. The file
+    equals, byte for byte, what :func:`write` makes of its content.
 """
 
 from __future__ import annotations
@@ -106,7 +104,7 @@ from skysh.sunlight import (
 __all__ = [
     "FORMAT", "FORMAT_VERSION", "RETIRED_VERSIONS", "DEFAULT_FILE_NAME", "MAX_FILE_BANDS", "MAX_FILE_DEGREE",
     "MAX_TABLE_MAGNITUDE", "MAX_METADATA_BYTES", "MAX_MATRIX_ENTRY", "MAX_MEMBER_BYTES", "MAX_FILE_BYTES", "MEMBERS",
-    "REQUIRED_MEMBERS", "FILE_COLOURSPACES", "BASIS", "TERM_ORDER", "DOMAIN", "HASH_KEY", "RUNTIME_FIELDS",
+    "REQUIRED_MEMBERS", "FILE_COLOURSPACES", "BASIS", "IRRADIANCE_BASIS", "TERM_ORDER", "DOMAIN", "HASH_KEY", "RUNTIME_FIELDS",
     "TABLES", "CoefficientFileError", "TableSpec", "NamedTable", "SkyTable", "zonal_half_layout", "content_sha256",
     "default_path", "read", "write",
 ]
@@ -114,10 +112,11 @@ __all__ = [
 FORMAT: str = "skysh-coefficients"
 """Value of the ``format`` member of every coefficient file."""
 
-FORMAT_VERSION: int = 3
+FORMAT_VERSION: int = 4
 """Version of the layout above; :func:`read` refuses any other."""
 
-RETIRED_VERSIONS: dict[int, str] = {1: "skysh 0.1.0: compressed, no content hash", 2: "hashed, without the sun's table"}
+RETIRED_VERSIONS: dict[int, str] = {1: "skysh 0.1.0: compressed, no content hash", 2: "hashed, without the sun's table",
+                                    3: "without the irradiance table"}
 """Versions once written and no longer read, with what they lacked (named in the refusal)."""
 
 DEFAULT_FILE_NAME: str = "preetham_sh.npz"
@@ -130,15 +129,13 @@ MAX_FILE_DEGREE: int = 31
 """Largest polynomial degree of any table in either variable: at most 32 x 32 = 1024 terms."""
 
 MAX_TABLE_MAGNITUDE: float = 1.0e4
-"""Largest |value| of a sky table entry (dimensionless: a coefficient over the luminance scale).
+"""Largest |value| of a sky (or irradiance) table entry (dimensionless: a coefficient over the luminance scale).
 
-The table holds Chebyshev coefficients of c_lm / luminance_scale (:data:`BASIS`);
-a least-squares fit of a function bounded by M has coefficients of order M, and
-the sky's SH coefficients are a few times its luminance scale at most
-(``tools/fit_sky.py`` prints the largest |value| of each fit it writes). An entry
-near 1e4 is thus a broken file, not a sky; and within the bound every runtime
-result stays finite: at most 1024 terms with |T_i T_j| <= 1 give at most about
-1e7 times the luminance scale, far from float64's 1.8e308."""
+The table holds Chebyshev coefficients of c_lm / luminance_scale (:data:`BASIS`); a least-squares
+fit of a function bounded by M has coefficients of order M, and the sky's SH coefficients are a few
+times its luminance scale at most (``tools/fit_sky.py`` prints the largest |value| of each fit). An
+entry near 1e4 is a broken file, not a sky; within the bound every runtime result stays finite:
+1024 terms with |T_i T_j| <= 1 give at most about 1e7 times the luminance scale."""
 
 MAX_METADATA_BYTES: int = 65536
 """Largest metadata JSON, bytes (a fit writes a few kilobytes)."""
@@ -162,6 +159,12 @@ BASIS: str = (
 )
 """The polynomial form the runtime evaluates (skysh.poly.scale, skysh.preetham.luminance_scale)."""
 
+IRRADIANCE_BASIS: str = (
+    "irradiance coefficient (l, m) = A_l * (the BASIS form of its row), A_l = pi, 2 pi / 3, pi / 4; "
+    "3 bands, rows m >= 0, sun at azimuth 0 (rotated about Z as the sky, Habel eq. 4)"
+)
+"""The irradiance table's form: the sky table's (:data:`BASIS`) times the clamped-cosine factor A_l."""
+
 TERM_ORDER: str = "i (d_tau + 1) + j for the largest degrees of any band"
 """Order of every table's terms (skysh.poly.term_index)."""
 
@@ -180,13 +183,14 @@ class TableSpec:
     What the format requires of one named table (an entry of :data:`TABLES`).
 
     ``name``: members ``<name>_table.npy``, ``<name>_degrees.npy``, metadata
-    block ``tables[name]``. ``required``: in every version 3 file (else both
-    members or neither). ``groups``: (low, high) count of degree pairs.
+    block ``tables[name]``. ``required``: in every file (else both members or
+    neither). ``groups``: (low, high) count of degree pairs.
     ``fields``: fixed block fields the runtime relies on, filled in by
     :func:`write`, any other value refused. ``max_magnitude``, ``max_abs_sum``
     (or None): largest |entry| and largest sum of |entries| per (row, channel),
     named ``bound_name`` in refusals. ``matrices``: block fields holding a
-    3 x 3 list of numbers within :data:`MAX_MATRIX_ENTRY` (required).
+    3 x 3 list of numbers within :data:`MAX_MATRIX_ENTRY` (required). ``recorded``:
+    block fields required in a file, of any JSON value (what the fit measured).
     """
 
     name: str
@@ -197,6 +201,7 @@ class TableSpec:
     max_abs_sum: float | None = None
     bound_name: str = "MAX_TABLE_MAGNITUDE"
     matrices: tuple[str, ...] = ()
+    recorded: tuple[str, ...] = ()
 
     @property
     def members(self) -> tuple[str, str]:
@@ -211,8 +216,14 @@ TABLES: tuple[TableSpec, ...] = (
                 "term_order": TERM_ORDER, "units": SUN_UNITS, "variables": SUN_VARIABLES},
         max_magnitude=SUN_MAX_LN, max_abs_sum=SUN_MAX_LN, bound_name="SUN_MAX_LN", matrices=("rgb_from_xyz",),
     ),
+    TableSpec(
+        name="irradiance", required=True, groups=(3, 3),
+        fields={"basis": IRRADIANCE_BASIS, "domain": DOMAIN, "term_order": TERM_ORDER,
+                "units": "cd/m^2 x sr (irradiance; lux for the luminance), linear RGB"},
+        max_magnitude=MAX_TABLE_MAGNITUDE, recorded=("objective", "margin", "fit_error", "nonnegativity"),
+    ),
 )
-"""The named tables of format version 3, in member order."""
+"""The named tables of format version 4, in member order."""
 
 
 def _layout(tables: tuple[TableSpec, ...]) -> tuple[tuple[str, ...], tuple[str, ...], dict[str, int], int]:
@@ -319,9 +330,9 @@ def _check_block(spec: TableSpec, block: Any, named: NamedTable | None, coloursp
     if named is not None:
         expected["degrees"] = named.degrees.tolist()
     if required:
-        missing = [key for key in (*expected, *spec.matrices) if key not in block]
+        missing = [key for key in (*expected, *spec.matrices, *spec.recorded) if key not in block]
         if missing:
-            raise CoefficientFileError(f"{where} lacks the fields {missing} the runtime relies on")
+            raise CoefficientFileError(f"{where} lacks the fields {missing} the format requires")
     for key, value in expected.items():
         if key in block and not _same(block[key], value):
             raise CoefficientFileError(f"{where} {key} {block[key]!r} differs from {value!r}, which this skysh's runtime assumes")
@@ -358,7 +369,8 @@ def _check_runtime_metadata(metadata: dict[str, Any], sky: SkyTable, required: b
     blocks = metadata.get("tables", {})
     if not isinstance(blocks, dict):
         raise CoefficientFileError(f"metadata tables must be a JSON object, got {_describe(blocks)}")
-    if not set(blocks) <= set(sky.tables) or (required and set(blocks) != set(sky.tables)):
+    held = set(sky.tables)  # in memory a block may describe a known table not held (it is then unused)
+    if set(blocks) != held if required else not set(blocks) <= held | {s.name for s in TABLES}:
         raise CoefficientFileError(f"metadata tables describes {sorted(blocks)}; the tables held are {sorted(sky.tables)}")
     for name, block in blocks.items():
         _check_block(_spec(name), block, sky.tables.get(name), metadata.get("colourspace", "sRGB"), required)
@@ -366,16 +378,8 @@ def _check_runtime_metadata(metadata: dict[str, Any], sky: SkyTable, required: b
 
 @dataclass(frozen=True)
 class NamedTable:
-    """
-    One named table besides the sky's (see :data:`TABLES` for what each means).
-
-    Attributes
-    ----------
-    table
-        (n_terms, rows, 3) Chebyshev coefficients in :data:`TERM_ORDER`.
-    degrees
-        (groups, 2) per-group (d_x, d_y), each in [0, :data:`MAX_FILE_DEGREE`].
-    """
+    """One named table besides the sky's (:data:`TABLES` says what each means): ``table`` (n_terms, rows, 3)
+    Chebyshev coefficients in :data:`TERM_ORDER`; ``degrees`` (groups, 2) per-group (d_x, d_y) in [0, 31]."""
 
     table: NDArray[np.float64]
     degrees: NDArray[np.int64]
@@ -404,9 +408,9 @@ class SkyTable:
         with a block per named table under ``"tables"``; a table read from a
         file also holds :data:`HASH_KEY`.
     tables
-        :class:`NamedTable` by name (:data:`TABLES`): ``tables["sun"]`` in
-        every file; optional in memory (a SkyTable without it serves the sky
-        but cannot be written).
+        :class:`NamedTable` by name (:data:`TABLES`): ``"sun"`` and
+        ``"irradiance"`` in every file; optional in memory (a SkyTable without
+        them serves the sky but cannot be written).
     """
 
     table: NDArray[np.float64]
@@ -432,16 +436,11 @@ class SkyTable:
 
     def validate(self) -> None:
         """
-        Raise :class:`CoefficientFileError` unless the tables can be used.
-
-        Checks, for the sky and every named table: numpy arrays of floats and
-        integers; degrees (bands or groups, 2) within the allowed count, each in
-        [0, :data:`MAX_FILE_DEGREE`]; the table's shape for those degrees;
-        finite values within the table's bounds (:data:`MAX_TABLE_MAGNITUDE`;
-        :data:`skysh.sunlight.SUN_MAX_LN` per entry and channel sum for the sun); zeros
-        above each band's degrees; only names of :data:`TABLES`; a dict of
-        metadata whose :data:`RUNTIME_FIELDS` and table blocks, where present,
-        are valid.
+        Raise :class:`CoefficientFileError` unless the tables can be used: for the sky and every
+        named table (names of :data:`TABLES`), arrays of floats and integers, degrees within the
+        allowed count and [0, :data:`MAX_FILE_DEGREE`], the shape for them, finite values within
+        the table's bounds, zeros above each group's degrees; valid :data:`RUNTIME_FIELDS` and
+        table blocks where present.
         """
         _check_arrays(self.table, self.degrees, ("table", "degrees", "bands"), (1, MAX_FILE_BANDS),
                       MAX_TABLE_MAGNITUDE, None, "MAX_TABLE_MAGNITUDE")
@@ -474,7 +473,7 @@ def content_sha256(table: NDArray, degrees: NDArray, metadata: dict[str, Any],
     """
     The content hash recorded in a file's metadata under :data:`HASH_KEY`.
 
-    SHA-256 (hex) of, in this order: ``"skysh-coefficients\\n3\\n"``; for every
+    SHA-256 (hex) of, in this order: ``"skysh-coefficients\\n4\\n"``; for every
     array in member order (``table`` and ``degrees``, then ``<name>_table`` and
     ``<name>_degrees`` of each named table present, in :data:`TABLES` order;
     floats '<f8', integers '<i8'), the line ``"<name> <dtype> <shape as a JSON
@@ -530,7 +529,8 @@ def _check_version(data: bytes, members: dict[str, _npz.Member], directory: int)
     if version in RETIRED_VERSIONS:
         raise CoefficientFileError(
             f"format version {version} ({RETIRED_VERSIONS[version]}) is no longer read: this skysh ({__version__}) "
-            f"reads format version {FORMAT_VERSION} only (hashed, strictly checked, with the sun's table); {regenerate}")
+            f"reads format version {FORMAT_VERSION} only (hashed, strictly checked, with the sun's and the irradiance "
+            f"tables); {regenerate}")
     if version != FORMAT_VERSION:
         raise CoefficientFileError(
             f"has format version {version}; this skysh ({__version__}) reads format version {FORMAT_VERSION} only "
@@ -614,25 +614,16 @@ def read(path: str | os.PathLike | None = None) -> SkyTable:
     """
     Read and check a coefficient file (every check of the module docstring).
 
-    Parameters
-    ----------
-    path
-        File to read; default :func:`default_path`.
-
-    Returns
-    -------
-    SkyTable
-        Read-only arrays (the sky's and ``tables["sun"]``); the metadata as
-        written (with :data:`HASH_KEY`).
+    ``path``: the file; default :func:`default_path`. Returns a :class:`SkyTable` of read-only
+    arrays (the sky's and every named table) and the metadata as written (with :data:`HASH_KEY`).
 
     Raises
     ------
     CoefficientFileError
-        For every kind of failure (missing, special or too large file,
-        truncated, corrupted, hostile members, other format or version, wrong
-        dtypes, shapes or values, unusable metadata, hash mismatch, altered
-        headers), with the path and what is wrong. Costs at most one read of
-        :data:`MAX_FILE_BYTES` and a few copies of it.
+        For every kind of failure (missing, special or too large file, truncated, corrupted,
+        hostile members, other format or version, wrong dtypes, shapes or values, unusable
+        metadata, hash mismatch, altered headers), with the path and what is wrong. Costs at
+        most one read of :data:`MAX_FILE_BYTES` and a few copies of it.
     """
     path = default_path() if path is None else _npz.as_path(path)
     data = _npz.read_bytes(path, MAX_FILE_BYTES)
@@ -673,17 +664,15 @@ def write(path: str | os.PathLike, sky_table: SkyTable) -> Path:
     table with its :attr:`TableSpec.fields`, degrees and the colourspace) and
     refused where they disagree, then hashed (:func:`content_sha256`). The
     bytes are checked by :func:`read`'s own decoder, written to a temporary
-    file beside ``path`` and renamed over it, so ``path`` is never left half
-    written.
+    file beside ``path`` and renamed over it: never left half written.
 
     Raises
     ------
     CoefficientFileError
-        If the tables fail :meth:`SkyTable.validate`, a required table (the
-        sun's) or a table block's matrix (``rgb_from_xyz``) is missing,
-        ``path`` is not a str or path, ``sky_table`` is not a SkyTable, or the
-        metadata is not JSON (str keys; finite numbers) or exceeds
-        :data:`MAX_METADATA_BYTES`.
+        If the tables fail :meth:`SkyTable.validate`; a required table (the sun's, the
+        irradiance's), a block's matrix (``rgb_from_xyz``) or recorded field is missing; ``path``
+        is not a str or path, ``sky_table`` not a SkyTable, or the metadata not JSON (str keys;
+        finite numbers) or above :data:`MAX_METADATA_BYTES`.
     OSError
         If the file cannot be written.
     """

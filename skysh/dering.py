@@ -12,8 +12,8 @@ Sloan (2017), "Deringing Spherical Harmonics" (seed 000), in the sign convention
 -   :data:`WINDOW_TABLE`, :func:`window_table`, :func:`sinc4_window` (eq. 6),
     :func:`delta_minimum`, :func:`linear_attenuation`: the windows and their derivation.
 -   :data:`PUNCTUAL_WINDOW`, :func:`directional_light_sh`: direct lights (section 3).
--   :func:`exact_min`, :func:`min_bound`: re-exported from :mod:`skysh.shmin` (the seed's
-    section 2.3 bound is kept for comparison only).
+-   :func:`exact_min`: re-exported from :mod:`skysh.shmin` (the seed's section 2.3 bound,
+    which this module no longer decides on, is kept for comparison in ``tools/studies``).
 
 Table 1 against eq. (6), a finding: no column of Table 1 (plain sinc) nor eq. (6) alone
 keeps a 3-band delta's irradiance non-negative (s1 <= sqrt(3)/2 is needed); eq. (6) with
@@ -29,18 +29,19 @@ from __future__ import annotations
 
 import math
 import warnings
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from skysh import sh, shmin
 from skysh._checks import as_float_array, check_bands, check_choice, check_dirs, check_flag, short_repr
-from skysh.shmin import exact_min, min_bound
+from skysh.shmin import exact_min
 
 __all__ = ["DeringWarning", "DERING_TARGETS", "DERING_METHODS", "MAX_DERING_BANDS", "SEED_WINDOW_SIZES",
            "SEED_TABLE_1", "RADIANCE_WINDOW_SIZES", "DELTA_MARGIN", "CERTIFIED_MARGIN", "LINEAR_ATTENUATION",
            "WINDOW_TABLE", "PUNCTUAL_WINDOW", "IRRADIANCE_KERNEL", "RADIANCE_KERNEL", "sinc4_window",
-           "delta_minimum", "linear_attenuation", "window_table", "min_bound", "exact_min", "dering",
+           "delta_minimum", "linear_attenuation", "window_table", "exact_min", "dering",
            "directional_light_sh"]
 
 
@@ -59,7 +60,8 @@ IRRADIANCE_KERNEL: NDArray[np.float64] = sh.cosine_lobe(MAX_DERING_BANDS)
 """Clamped-cosine factors A_0 .. A_6 (pi, 2 pi/3, pi/4, 0, -pi/24, 0, pi/64)."""
 RADIANCE_KERNEL: NDArray[np.float64] = np.ones(MAX_DERING_BANDS)  # the identity: deringing the radiance
 IRRADIANCE_KERNEL.flags.writeable = RADIANCE_KERNEL.flags.writeable = False
-_KERNELS: dict[str, NDArray[np.float64]] = {"irradiance": IRRADIANCE_KERNEL, "radiance": RADIANCE_KERNEL}
+KERNELS: dict[str, NDArray[np.float64]] = {"irradiance": IRRADIANCE_KERNEL, "radiance": RADIANCE_KERNEL}
+"""The factor of each band in the function made non-negative, per :data:`DERING_TARGETS` entry."""
 
 SEED_WINDOW_SIZES: tuple[float, ...] = (math.inf, 16.7, 11.3, 10.0, 9.0, 7.0, 5.6)
 """Window sizes w of the seed's Table 1 (band where the window reaches zero)."""
@@ -77,29 +79,13 @@ DELTA_MARGIN: float = 1e-9
 rounding allowance, 2.3e-13 of the normalised size): a lone delta never fails."""
 
 CERTIFIED_MARGIN: float = 1e-3
-"""4..7 bands (a certified minimum, with slack): a non-negative light's curvature bound at the
-last row is at most 5.5 means, so the certificate's third level (slack 6.3e-4 means; both by
-``tools/dering_experiment.py``) always certifies it; the last row changes < 0.1 %."""
+"""4..7 bands (a certified minimum, with slack): the last row keeps a delta's target >= 1e-3 of
+its mean, more than the certificate's slack at :data:`shmin.LEVELS` for any non-negative light
+(``tools/dering_experiment.py`` prints both), so none fails; the last row changes < 0.1 %."""
 
 PUNCTUAL_WINDOW: tuple[float, float, float] = (1.0, 0.92, 0.73)
 """The seed's hand-tuned factors for direct lights (section 3); alone, a delta so windowed dips
 to -7.5 % of its mean (0.92 > sqrt(3)/2): the sky it is added to must cover that."""
-
-_L_OF: NDArray[np.intp] = np.repeat(np.arange(MAX_DERING_BANDS), 2 * np.arange(MAX_DERING_BANDS) + 1)  # l of index
-
-
-def _legendre_power() -> NDArray[np.float64]:
-    """(7, 7): row l holds the power-basis coefficients of the Legendre P_l (Bonnet's recursion)."""
-    p = np.zeros((MAX_DERING_BANDS, MAX_DERING_BANDS))
-    p[0, 0] = p[1, 1] = 1.0
-    for l in range(2, MAX_DERING_BANDS):
-        p[l, 1:] = (2 * l - 1) / l * p[l - 1, :-1]
-        p[l] -= (l - 1) / l * p[l - 2]
-    return p
-
-
-_LEGENDRE_POWER: NDArray[np.float64] = _legendre_power()
-"""Legendre polynomials P_0 .. P_6 in the power basis."""
 
 
 def sinc4_window(cutoff: float, bands: int = 3) -> NDArray[np.float64]:
@@ -118,7 +104,8 @@ def sinc4_window(cutoff: float, bands: int = 3) -> NDArray[np.float64]:
 def _delta_power(scales: NDArray, target: str) -> NDArray:
     """Power-basis coefficients in t of a delta's windowed target ``sum_l A_l s_l (2l+1)/(4 pi) P_l(t)``."""
     n = len(scales)
-    return (_KERNELS[target][:n] * scales * (2 * np.arange(n) + 1) / (4.0 * math.pi)) @ _LEGENDRE_POWER[:n, :n]
+    power = np.polynomial.legendre.leg2poly(KERNELS[target][:n] * scales * (2 * np.arange(n) + 1) / (4.0 * math.pi))
+    return np.pad(power, (0, n - len(power)))  # (leg2poly drops trailing zeros)
 
 
 def _real_roots(power: NDArray, low: float, high: float) -> NDArray:  # of a power-basis polynomial
@@ -151,10 +138,10 @@ def linear_attenuation(cutoff: float, bands: int = 3, target: str = "irradiance"
     bands = check_bands(bands, high=MAX_DERING_BANDS)
     check_choice(target, "target", DERING_TARGETS)
     base = sinc4_window(cutoff, bands)
-    floor = (DELTA_MARGIN if bands <= 3 else CERTIFIED_MARGIN) * _KERNELS[target][0] / (4.0 * math.pi)
+    floor = (DELTA_MARGIN if bands <= 3 else CERTIFIED_MARGIN) * KERNELS[target][0] / (4.0 * math.pi)
     if bands < 2 or delta_minimum(base, target) >= floor:
         return 1.0
-    k = _KERNELS[target][1] * base[1] * 3.0 / (4.0 * math.pi)  # the linear band is k t
+    k = KERNELS[target][1] * base[1] * 3.0 / (4.0 * math.pi)  # the linear band is k t
     rest = _delta_power(base, target)
     rest[1] -= k
     rest[0] -= floor
@@ -165,22 +152,45 @@ def linear_attenuation(cutoff: float, bands: int = 3, target: str = "irradiance"
     return a
 
 
-_TABLES: dict[tuple[int, str], tuple[NDArray, NDArray, NDArray]] = {}
-"""Cache of :func:`window_table`, with its s1 and s2 columns (R, 1) padded to 3 bands."""
+class _Rows(NamedTuple):
+    """One (bands, target) setting of the search, built once: the table (R, N), its factor of
+    every coefficient (R, K, 1) and times the target's kernel (R, K), the maps of normalised
+    coefficients to (c, g) (K, 4) and Q (K, 9) of the target, and the rows' s1, s1^2, s2 columns (R, 1) (zero past
+    the bands)."""
+
+    table: NDArray
+    per_coeff: NDArray
+    per_target: NDArray
+    form_cg: NDArray
+    form_q: NDArray
+    s1: NDArray
+    s1sq: NDArray
+    s2: NDArray
 
 
-def _table(bands: int, target: str) -> tuple[NDArray, NDArray, NDArray]:
-    if (bands, target) not in _TABLES:
+_ROWS: dict[tuple[int, str], _Rows] = {}
+"""Cache of the search's settings (:func:`window_table` reads its table)."""
+
+
+def _rows(bands: int, target: str) -> _Rows:
+    if (bands, target) not in _ROWS:
         sizes = SEED_WINDOW_SIZES if target == "irradiance" else RADIANCE_WINDOW_SIZES
         a_min = linear_attenuation(sizes[-1], bands, target)
         rows = np.array([sinc4_window(w, max(bands, 3)) for w in sizes])  # band 2 drives the ramp
         rows[:, 1] *= 1.0 - (1.0 - a_min) * (1.0 - rows[:, 2]) / (1.0 - rows[-1, 2])
-        table = np.ascontiguousarray(rows[:, :bands])
+        l_of = sh.band_of_index(bands)
         pad = np.where(np.arange(3) < bands, rows[:, :3], 0.0)
-        for array in (table, pad):
+        kernel = KERNELS[target][l_of]
+        quadratic = bands <= 3 or (bands == 4 and target == "irradiance")  # A_3 = 0: a 3-band target
+        k = min(bands, 3) ** 2
+        form = kernel[:k, None] * shmin.FORM_MAP[:k] if quadratic else np.zeros((0, 13))
+        out = _Rows(np.ascontiguousarray(rows[:, :bands]), rows[:, l_of, None], rows[:, l_of] * kernel,
+                    np.ascontiguousarray(form[:, :4]), np.ascontiguousarray(form[:, 4:]), pad[:, 1:2], pad[:, 1:2] ** 2,
+                    pad[:, 2:3])
+        for array in out:
             array.flags.writeable = False
-        _TABLES[(bands, target)] = (table, pad[:, 1:2], pad[:, 2:3])
-    return _TABLES[(bands, target)]
+        _ROWS[(bands, target)] = out
+    return _ROWS[(bands, target)]
 
 
 def window_table(bands: int = 3, target: str = "irradiance") -> NDArray[np.float64]:
@@ -190,7 +200,7 @@ def window_table(bands: int = 3, target: str = "irradiance") -> NDArray[np.float
     Row r is eq. (6) at ``SEED_WINDOW_SIZES[r]`` (radiance: ``RADIANCE_WINDOW_SIZES``) with band
     1 times ``1 - (1 - a) rho``, ``a`` the last row's :func:`linear_attenuation`, ``rho = (1 -
     s2(w)) / (1 - s2(w_last))``."""
-    return _table(check_bands(bands, high=MAX_DERING_BANDS), check_choice(target, "target", DERING_TARGETS))[0]
+    return _rows(check_bands(bands, high=MAX_DERING_BANDS), check_choice(target, "target", DERING_TARGETS)).table
 
 
 LINEAR_ATTENUATION: float = linear_attenuation(SEED_WINDOW_SIZES[-1], 3, "irradiance")
@@ -201,63 +211,78 @@ WINDOW_TABLE: NDArray[np.float64] = window_table(3, "irradiance")
 times :data:`LINEAR_ATTENUATION`."""
 
 
+_ONES3: NDArray[np.float64] = np.ones(3)
+_ONES_R: NDArray[np.float64] = np.ones(len(RADIANCE_WINDOW_SIZES))
+
+
 def _first(ok: NDArray) -> NDArray:
     """The least row r with ok[:, :, r] in every channel, per function; R if none."""
     ok = np.logical_and.reduce(ok, 1)
     return np.where(ok.any(-1), np.argmax(ok, -1), ok.shape[-1])
 
 
-def _least_row3(t: NDArray, s1: NDArray, s2: NDArray) -> NDArray:
-    """:func:`_least_row` for 1..3 bands: exact minima of all rows from one eigendecomposition
-    (a row scales g by s1, Q by s2). Shortcuts that cannot change the answer, per function:
-    the dual at x = |g|/2 certifying row 0; after one Newton step, a certified row with every
-    earlier row refuted by a negative value (at the dual's point). Else the remaining steps."""
-    form = t @ shmin.FORM_MAP[: t.shape[-1]]
-    lam, v = np.linalg.eigh(form[..., 4:].reshape(form.shape[:-1] + (3, 3)))
-    gam = (form[..., None, 1:4] @ v)[..., 0, :]
-    a, c0 = 0.25 * gam * gam, form[..., 0]
-    x = np.maximum(np.sqrt(np.add.reduce(a, -1)), shmin._FLOOR)
-    first = np.zeros(len(t), dtype=np.intp)
-    todo = np.flatnonzero(~np.logical_and.reduce(shmin._dual(c0, lam, lam - lam[..., :1], a, x) >= shmin._ALLOWANCE, 1))
-    if todo.size < len(t):  # (or none: all certified at row 0)
-        if todo.size == 0:
-            return first
-        lam, a, gam, c0 = lam[todo], a[todo], gam[todo], c0[todo]
-    lam, a, gam, c0 = lam[..., None, :] * s2, a[..., None, :] * (s1 * s1), gam[..., None, :] * s1, c0[..., None]
-    d, x = shmin._prefix(lam, a)
-    x = shmin._newton(d, a, x, 1)
-    first[todo] = _first(shmin._dual(c0, lam, d, a, x) >= shmin._ALLOWANCE)
-    y = gam / (-2.0 * (d + x[..., None]))
-    y /= np.sqrt(np.add.reduce(y * y, -1) + shmin._TINY)[..., None]
-    refuted = np.logical_or.reduce(c0 + np.add.reduce((lam * y + gam) * y, -1) < 0.0, 1)
-    left = np.flatnonzero(~np.logical_and.reduce(refuted | (np.arange(len(s1)) >= first[todo, None]), 1))
+def _least_row3(t: NDArray, rows: _Rows) -> NDArray:
+    """:func:`_least_row` for 1..3 bands, exact: every row's dual and a point of it from one
+    eigendecomposition (a row scales g by s1 and Q by s2). Per function, what cannot change
+    the answer is skipped: row 0 certified by its dual at x = |g|/2; after one Newton step, a
+    certified row whose earlier rows all take a negative value at their dual's point. The
+    rest take the remaining steps (the cluster bounds, then :data:`shmin.NEWTON_STEPS`)."""
+    cg = t @ rows.form_cg
+    lam, v = np.linalg.eigh((t @ rows.form_q).reshape(t.shape[:-1] + (3, 3)))
+    gam = (cg[..., None, 1:] @ v)[..., 0, :]
+    a, d, c0 = 0.25 * gam * gam, lam - lam[..., :1], cg[..., 0]
+    x = np.maximum(np.sqrt(a @ _ONES3), shmin.FLOOR)
+    ok = np.logical_and.reduce(shmin.dual(c0, lam, d, a, x) >= shmin.ALLOWANCE, 1)
+    if ok.all():
+        return np.zeros(len(t), dtype=np.intp)
+    todo = np.flatnonzero(~ok) if ok.any() else slice(None)
+    lam, d = lam[todo, :, None] * rows.s2, d[todo, :, None] * rows.s2
+    a, gam = a[todo, :, None] * rows.s1sq, gam[todo, :, None] * rows.s1
+    c0 = c0[todo, :, None]
+    x = shmin.newton(d, a, shmin.prefix_bound(d, a), 1)
+    w = 1.0 / (d + x[..., None])
+    first = _first(c0 + lam[..., 0] - x - (a * w) @ _ONES3 >= shmin.ALLOWANCE)
+    y = gam * w  # -2 times the dual's point: the value at y / |y|
+    n2 = (y * y) @ _ONES3 + shmin.TINY
+    refuted = np.logical_or.reduce(c0 - (gam * y) @ _ONES3 / np.sqrt(n2) + (lam * y * y) @ _ONES3 / n2 < 0.0, 1)
+    left = np.flatnonzero(np.logical_and.accumulate(refuted, -1) @ _ONES_R[: refuted.shape[-1]] < first)
     if left.size:
         d, a, lam, c0, x = d[left], a[left], lam[left], c0[left], x[left]
-        x = shmin._newton(d, a, shmin._candidates(d, a, x), shmin._NEWTON_STEPS)
-        first[todo[left]] = _first(shmin._dual(c0, lam, d, a, x) >= shmin._ALLOWANCE)
-    return first
+        x = shmin.newton(d, a, shmin.cluster_bounds(d, a, x), shmin.NEWTON_STEPS)
+        first[left] = _first(shmin.dual(c0, lam, d, a, x) >= shmin.ALLOWANCE)
+    if isinstance(todo, slice):
+        return first
+    out = np.zeros(len(t), dtype=np.intp)
+    out[todo] = first
+    return out
 
 
-def _least_row(t: NDArray, table: NDArray, s1: NDArray, s2: NDArray) -> NDArray:
-    """Per function of t (n, C, K) (normalised target SH), the least row certified non-negative
-    in every channel, R if none. 4..7 bands: level 0 of the certificate for every row, then
-    the full certificate, least row first, for what is left undecided."""
+def _least_row(t: NDArray, rows: _Rows) -> NDArray:
+    """Per function of t (n, C, K) (normalised SH), the least row certified non-negative in
+    every channel, R if none. 4..7 bands, row by row for the functions still undecided:
+    level 0 of the certificate, then, where no channel was refuted by a sampled negative
+    value, the full certificate for the channels left undecided."""
     n, n_ch, k = t.shape
-    if k <= 9:
-        return _least_row3(t, s1, s2)
-    r = len(table)
-    flat = (t[:, :, None, :] * table[:, _L_OF[:k]]).reshape(-1, k)
-    vals = shmin._level0(t, table).reshape(len(flat), -1)
-    low, best, _ = shmin._sampled_min(flat, 0.0, levels=0, vals=vals)
-    low = low.reshape(n, n_ch, r)
-    refuted: NDArray[np.bool_] = np.any(best.reshape(n, n_ch, r) < 0.0, axis=1)  # (n, R): a negative value was sampled
-    for row in range(r):
-        ok = np.logical_and.reduce(low >= 0.0, axis=1)
-        idx = np.flatnonzero((low[:, :, row] < 0.0) & (~ok[:, : row + 1].any(-1) & ~refuted[:, row])[:, None])
+    if len(rows.form_cg):
+        return _least_row3(t[..., : len(rows.form_cg)], rows)
+    first = np.full(n, len(rows.table))
+    todo = np.arange(n)
+    for row, factors in enumerate(rows.per_target):
+        flat = (t[todo] * factors).reshape(-1, k)
+        vals = flat @ shmin.level0_basis(math.isqrt(k))
+        best = vals.min(-1)
+        k2, allow = shmin.curvature(flat)
+        low = best - 0.5 * k2 * shmin.COVER_RADIUS**2 - allow
+        refuted = np.logical_or.reduce((best < 0.0).reshape(-1, n_ch), 1)
+        idx = np.flatnonzero((low < 0.0) & np.repeat(~refuted, n_ch))
         if idx.size:
-            sel = idx * r + row  # (function, channel) -> flat index of this row
-            low[idx // n_ch, idx % n_ch, row] = shmin._sampled_min(flat[sel], 0.0, vals=vals[sel])[0]
-    return _first(low >= 0.0)
+            low[idx] = shmin.certified_min(flat[idx], 0.0, vals=vals[idx])[0]
+        ok = np.logical_and.reduce((low >= 0.0).reshape(-1, n_ch), 1)
+        first[todo[ok]] = row
+        todo = todo[~ok]
+        if todo.size == 0:
+            break
+    return first
 
 
 def dering(
@@ -310,21 +335,20 @@ def dering(
     check_choice(target, "target", DERING_TARGETS)
     check_choice(method, "method", DERING_METHODS)
     return_failed = check_flag(return_failed, "return_failed")
-    c, vector, bands = shmin._check(coeffs, high=MAX_DERING_BANDS)
+    c, vector, bands = shmin.check_coeffs(coeffs, high=MAX_DERING_BANDS)
     flat = c.reshape((-1,) + c.shape[-2:])
-    l_of = _L_OF[: bands * bands]
-    table, s1, s2 = _table(bands, target)
-    t, _, zero = shmin._normalised(np.swapaxes(flat, -1, -2))
+    rows = _rows(bands, target)
+    t, _, zero = shmin.normalised(np.swapaxes(flat, -1, -2))
     t[..., 0] += zero  # a zero channel's minimum is exactly 0: it passes, as the constant 1 does
-    first = _least_row(t * _KERNELS[target][l_of], table, s1, s2)
-    failed = first == len(table)
-    scales = table[np.minimum(first, len(table) - 1)]
+    first = _least_row(t, rows)
+    failed = first == len(rows.table)
     if failed.any():
         warnings.warn(f"dering: {int(failed.sum())} of {len(flat)} functions stay negative ({target}) even at the "
                       "most aggressive window: they are not the projection of any non-negative light; the last "
                       "window was applied to them.", DeringWarning, stacklevel=2)
-    out = (flat * scales[:, l_of, None]).reshape(c.shape)
-    scales = scales.reshape(c.shape[:-2] + (bands,))
+        first = np.minimum(first, len(rows.table) - 1)
+    out = (flat * rows.per_coeff[first]).reshape(c.shape)
+    scales = rows.table[first].reshape(c.shape[:-2] + (bands,))
     out = out[:, 0] if vector else out
     return (out, scales, failed.reshape(c.shape[:-2])) if return_failed else (out, scales)
 

@@ -14,7 +14,8 @@ API takes, in its order and shape.
 -   :func:`convert`: skysh radiance coefficients (..., N*N, 3) -> the engine's
     numbers (..., *EngineMap.shape).
 -   :func:`snippet`: paste-ready code building the engine object.
--   :func:`sun_direction`: the unit vector towards the sun in an engine's frame.
+-   :func:`sun_direction`: the unit vector towards the sun in an engine's frame; the sun's
+    light in each engine's units (colour, intensity, code): :mod:`skysh.engine_sun`.
 
 Every engine frame here keeps the physical sky: skysh's +X (sun azimuth 0)
 stays the engine's +X, the zenith becomes the engine's up axis, and the third
@@ -395,7 +396,8 @@ def convert(coeffs: ArrayLike, engine: str) -> NDArray[np.float64]:
     coeffs
         skysh **radiance** coefficients, shape (..., N*N, 3): Z up, real SH with the Condon-Shortley
         phase, cd/m^2, linear RGB (:meth:`skysh.SkySH.coefficients` with ``irradiance=False``; any
-        Gibbs filter or deringing is applied before). N in [1, ``ENGINE_MAX_BANDS[engine]``].
+        Gibbs filter or deringing is applied before; for diffuse light at 3 bands pass
+        ``irradiance_table=True``: the certified table's radiance-equivalent). N in [1, ``ENGINE_MAX_BANDS[engine]``].
     engine
         One of :data:`ENGINES` (see the module docstring for what each one feeds).
 

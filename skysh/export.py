@@ -11,7 +11,7 @@ function, like the C arrays the Habel seed published, ready to paste.
     (:mod:`skysh.engines`). ``"js"`` and ``"json"`` are written by :mod:`skysh.export_js`.
 -   :func:`export_tables`: the numbers every export is generated from.
 -   :func:`double_literal`, :func:`float32_literal`: shortest round-trip
-    number text for the generated code.
+    number text for the generated code (from :mod:`skysh.export_lights`).
 -   :data:`EXPORT_FORMATS`, :data:`C_REAL_TYPES`, :data:`DEFAULT_FILE_NAMES`.
 
 The C export is a **header** (default name ``sky_sh.h``): an include guard,
@@ -20,12 +20,13 @@ or C++ files may ``#include`` it; link with ``-lm`` (it calls ``tan``, ``exp``,
 ``log``, ``cos``, ``sin``, ``fmod``).
 
 What the exported function computes, step by step (the runtime's steps in its
-order; the numbers come from :class:`skysh.SkySH`'s plan and
-:mod:`skysh.preetham`, never retyped):
+order; the numbers come from the file's tables as the runtime reads them and
+from :mod:`skysh.preetham`, never retyped):
 
 1.  Refuse a sun zenith outside [0, pi/2] rad or a turbidity outside [2.5, 6]
     (and, in C, a non-finite azimuth): C returns -1, the shaders ``false``,
-    and the output is zeroed.
+    and the output is zeroed; a ground albedo outside [0, 1] (C: -3); an
+    ``irradiance_table`` the export cannot honour (C: -5).
 2.  ``x = clamp(sun_zenith * X_SCALE - X_SHIFT, -1, 1)``,
     ``y = clamp(log(turbidity) * Y_SCALE - Y_SHIFT, -1, 1)``; Chebyshev
     ``T_0 .. T_DX`` at x and ``T_0 .. T_DY`` at y by ``T_k = 2 t T_(k-1) -
@@ -33,7 +34,11 @@ order; the numbers come from :class:`skysh.SkySH`'s plan and
 3.  ``acc[r][c] = sum_i sum_j T_i(x) T_j(y) TABLE[i][j][r][c]`` for every stored
     coefficient r (m >= 0, ordered ``[(l, m) for l in range(N) for m in
     range(l + 1)]``) and channel c (R, G, B); C and JS store the table r-major,
-    so that each r is a contiguous dot product.
+    so that each r is a contiguous dot product. With the certified irradiance
+    table (3 bands; ``irradiance_table``, by intent for diffuse light, as the
+    runtime: :func:`skysh.export_lights.irradiance_parts`) the rows come from
+    ``IRRADIANCE`` instead (its radiance-equivalent E_lm / A_l), the ground's c_10
+    from ``TABLE``; steps 4 and 6 are then skipped.
 4.  Gibbs filter (Habel eq. 5), when asked: zonal rows times ``sinc(pi l / N)``;
     times the luminance scale ``Y_z(ts, T) / F_Y(0, ts)`` (Preetham, cd/m^2).
 5.  Rotation about Z (Habel eq. 4) by ``phi = fmod(sun_azimuth, 2 pi)`` as the
@@ -41,12 +46,18 @@ order; the numbers come from :class:`skysh.SkySH`'s plan and
     |m|]`` times ``cos(m phi)`` (m >= 0) or ``sin(|m| phi)`` (m < 0).
 6.  Deringing, when asked, for 3 bands (:mod:`skysh.export_dering`: the
     runtime's window, Sloan 2017); other band counts refuse it.
-7.  A per-band factor, which commutes with the rotation (one multiplication
-    with step 5 when there is no step 6): ``A_l`` for irradiance, or an
+7.  The sun and the ground, when asked (:mod:`skysh.export_lights`, the order of
+    :mod:`skysh.lights`): the sun's windowed delta (colour clamped at 0) and a
+    Lambertian ground lit by the unfiltered sky's c_10 and the sun.
+8.  A per-band factor, which commutes with the rotation (one multiplication
+    with step 5 when steps 6 and 7 are off): ``A_l`` for irradiance, or an
     engine's folded factor (:func:`skysh.export_js.engine_plan`).
-8.  Engines only: the rest of the engine's linear map (frame change, signs,
+9.  Engines only: the rest of the engine's linear map (frame change, signs,
     per-coefficient constants, packing) written out term by term, plus its
     constant offset.
+
+``skysh_sun_light`` (the shaders' too) gives the sun as a directional light, as
+:meth:`skysh.SkySH.sun_light`.
 
 Without an engine the result is (N * N) RGB coefficients in cd/m^2 (irradiance
 cd/m^2 x sr), linear sRGB, Z up, real SH with the Condon-Shortley phase
@@ -79,9 +90,24 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from skysh import coefficient_file, runtime, sh
-from skysh._checks import check_bands, check_choice, check_scalar
+from skysh import coefficient_file, poly, runtime, sh
+from skysh._checks import check_bands, check_choice
 from skysh._version import __version__
+from skysh.export_lights import (
+    FLOAT32_MAX,
+    ZENITH_CONSTANTS,
+    LightTables,
+    c_like_engine,
+    c_like_lights,
+    chebyshev_terms,
+    dering_parts,
+    double_literal,
+    float32_literal,
+    irradiance_parts,
+    light_tables,
+    real_literal,
+    text_rows,
+)
 from skysh.preetham import PEREZ_Y
 
 if TYPE_CHECKING:
@@ -89,7 +115,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "EXPORT_FORMATS", "C_REAL_TYPES", "DEFAULT_FILE_NAMES", "ExportTables", "export_tables", "export_source",
-    "double_literal", "float32_literal",
+    "double_literal", "float32_literal", "FLOAT32_MAX",
 ]
 
 EXPORT_FORMATS: tuple[str, ...] = ("c", "glsl", "hlsl", "json", "js")
@@ -103,7 +129,7 @@ DEFAULT_FILE_NAMES: dict[str, str] = {
 }
 """The file name each export is meant to be saved as (the C export is a header)."""
 
-_VALUES_PER_LINE: int = 4
+_TRIPLES_PER_LINE: int = 4
 """RGB triples per line in the generated tables."""
 
 
@@ -117,7 +143,11 @@ class ExportTables:
     the Chebyshev coefficients (no Gibbs filter) of the stored (m >= 0) SH coefficients
     over the luminance scale (dimensionless), third axis ``half_layout`` (l, m); ``gibbs``
     (N,) sinc(pi l / N); ``lobe`` (N,) A_l; ``x_scale, x_shift, y_scale, y_shift`` the
-    variables' affine maps (module docstring, step 2); the fitted domain (radians, turbidity).
+    variables' affine maps (module docstring, step 2); the fitted domain (radians, turbidity);
+    ``lights`` the sun's and the ground's numbers (:func:`skysh.export_lights.light_tables`);
+    ``irradiance`` (DX + 1, DY + 1, 6, 3) the certified irradiance table's rows (E_lm / A_l over
+    the luminance scale, 3 bands, m >= 0) or None (fewer than 3 bands, or a file without it).
+    (DX, DY) are the largest of the N bands' and the irradiance table's, zeros above a table's own.
     """
 
     bands: int
@@ -132,65 +162,40 @@ class ExportTables:
     y_shift: float
     sun_zenith_domain: tuple[float, float]
     turbidity_domain: tuple[float, float]
+    lights: LightTables
+    irradiance: NDArray[np.float64] | None
 
 
 def export_tables(sky: runtime.SkySH, bands: int = 3) -> ExportTables:
     """
-    The numbers of an export: the runtime's plan for (``bands``, no Gibbs) and its constants.
+    The numbers of an export: the file's sky table as the runtime's plan for (``bands``, no Gibbs)
+    reads it (the largest degrees of bands 0 .. N - 1, the m >= 0 rows), the irradiance table
+    (3 bands or more) and the variables' maps.
 
     Parameters
     ----------
     sky
-        A loaded :class:`skysh.SkySH`.
+        A loaded :class:`skysh.SkySH` (read through its public ``table``).
     bands
         N in [1, the file's bands].
     """
     if not isinstance(sky, runtime.SkySH):
         raise ValueError(f"sky must be a loaded skysh.SkySH (SkySH.load()), got {type(sky).__name__}")
     bands = check_bands(bands, high=sky.bands)
-    plan = sky._plans[(bands, False)]  # the runtime's own table: one source for the numbers
-    dx, dy = plan.degrees
+    named = sky.table.tables.get("irradiance") if sky.has_irradiance_table and bands >= 3 else None
+    own = sky.table.degrees[:bands] if named is None else np.concatenate([sky.table.degrees[:bands], named.degrees])
+    dx, dy = (int(d) for d in own.max(axis=0))
     layout = coefficient_file.zonal_half_layout(bands)
-    table = np.array(plan.half_table).reshape(dx + 1, dy + 1, len(layout), 3)
+    table = chebyshev_terms(sky.table.table[:, : len(layout)], sky.table.max_degrees, (dx, dy))
+    irradiance = None if named is None else chebyshev_terms(named.table, named.max_degrees, (dx, dy))
+    (z0, z1), (t0, t1) = poly.SUN_ZENITH_DOMAIN, poly.TURBIDITY_DOMAIN
+    l0, l1 = math.log(t0), math.log(t1)
     return ExportTables(
-        bands=bands,
-        degrees=(dx, dy),
-        table=table,
-        half_layout=layout,
-        gibbs=runtime.gibbs_factors(bands),
-        lobe=sh.cosine_lobe(bands),
-        x_scale=runtime._X_SCALE,
-        x_shift=runtime._X_SHIFT,
-        y_scale=runtime._Y_SCALE,
-        y_shift=runtime._Y_SHIFT,
-        sun_zenith_domain=(runtime._ZMIN, runtime._ZMAX),
-        turbidity_domain=(runtime._TMIN, runtime._TMAX),
+        bands=bands, degrees=(dx, dy), table=table, half_layout=layout, gibbs=runtime.gibbs_factors(bands),
+        lobe=sh.cosine_lobe(bands), x_scale=2.0 / (z1 - z0), x_shift=(z0 + z1) / (z1 - z0), y_scale=2.0 / (l1 - l0),
+        y_shift=(l0 + l1) / (l1 - l0), sun_zenith_domain=(z0, z1), turbidity_domain=(t0, t1),
+        lights=light_tables(sky, bands, (dx, dy)), irradiance=irradiance,
     )
-
-
-FLOAT32_MAX: float = float(np.finfo(np.float32).max)
-"""Largest finite float32: beyond it a float32 literal would read back as inf."""
-
-
-def double_literal(value: float) -> str:
-    """Shortest text that reads back as the same double, always with a '.' or an exponent."""
-    text = repr(check_scalar(value, "value"))
-    return text if any(ch in text for ch in ".en") else text + ".0"
-
-
-def float32_literal(value: float) -> str:
-    """Shortest text that reads back as the same float32 (valid in C, GLSL and HLSL, no suffix)."""
-    number = check_scalar(value, "value", -FLOAT32_MAX, FLOAT32_MAX, unit="(the float32 range)")
-    return np.format_float_scientific(np.float32(number), unique=True, trim="0")
-
-
-def _real(value: float, real: str) -> str:
-    return double_literal(value) if real == "double" else float32_literal(value) + "f"
-
-
-def _rows(items: list[str], indent: str) -> str:
-    lines = [", ".join(items[k : k + _VALUES_PER_LINE]) for k in range(0, len(items), _VALUES_PER_LINE)]
-    return (",\n" + indent).join(lines)
 
 
 # Templates: $-placeholders (string.Template), so the languages' braces stay literal.
@@ -202,7 +207,8 @@ phase; coefficient i = l (l + 1) + m, l = 0 .. $last_l. Output: linear sRGB,
 cd/m^2 (irradiance: cd/m^2 x sr). Domain: sun zenith [0, pi/2] rad,
 turbidity [2.5, 6], any finite azimuth (radians). Tables: $precision.
 Reproduces skysh.SkySH.coefficients(sun_zenith, turbidity, sun_azimuth,
-bands=$bands, gibbs=..., dering=..., irradiance=...).$engine_text"""
+bands=$bands, gibbs=..., dering=..., irradiance=..., sun=..., ground_albedo=...,
+irradiance_table=...) and skysh.SkySH.sun_light (skysh_sun_light: the sun as a directional light).$engine_text"""
 
 _ENGINE_HEADER = """
 Engine $engine ($count values, shape $shape, row-major): skysh_engine_coefficients()
@@ -224,6 +230,7 @@ with -lm. Every function is static inline and every table static const.
 #define SKYSH_BANDS $bands
 #define SKYSH_COUNT $count /* SKYSH_BANDS * SKYSH_BANDS */
 #define SKYSH_HALF $half /* stored (m >= 0) coefficients */
+#define SKYSH_ROWS $rows /* table rows: the stored coefficients (one band: and the unfiltered c_10) */
 #define SKYSH_DX $dx /* Chebyshev degree in x (sun zenith) */
 #define SKYSH_DY $dy /* Chebyshev degree in y (log turbidity) */
 #define SKYSH_DERING $has_dering /* 1: the dering option works (3-band exports) */
@@ -235,7 +242,7 @@ typedef $real skysh_real;
  * [r][3 (i (SKYSH_DY + 1) + j) + c]: coefficient of T_i(x) T_j(y) for stored coefficient r,
  * channel c (R, G, B); the terms of one stored coefficient are contiguous.
  */
-static const skysh_real SKYSH_TABLE[SKYSH_HALF][SKYSH_TERMS * 3] = {
+static const skysh_real SKYSH_TABLE[SKYSH_ROWS][SKYSH_TERMS * 3] = {
     $table
 };
 
@@ -245,7 +252,30 @@ static const skysh_real SKYSH_LOBE[SKYSH_BANDS] = { $lobe };
 
 /* Perez A..E of luminance as (slope, intercept) in turbidity (Preetham 1999). */
 static const skysh_real SKYSH_PEREZ_Y[5][2] = { $perez };
-$engine_tables$dering_defs
+$engine_tables$dering_defs$lights$irradiance_defs
+/* Habel eq. (1) for one stored coefficient: acc[c] = sum_q w[q] p[3 q + c], six independent sums (latency). */
+static inline void skysh_row(const skysh_real *p, const skysh_real *w, skysh_real acc[3])
+{
+    skysh_real r0 = $c0, g0 = $c0, b0 = $c0, r1 = $c0, g1 = $c0, b1 = $c0;
+    int i;
+    for (i = 0; i + 1 < SKYSH_TERMS; i += 2, p += 6) {
+        r0 += w[i] * p[0];
+        g0 += w[i] * p[1];
+        b0 += w[i] * p[2];
+        r1 += w[i + 1] * p[3];
+        g1 += w[i + 1] * p[4];
+        b1 += w[i + 1] * p[5];
+    }
+    if (i < SKYSH_TERMS) {
+        r0 += w[i] * p[0];
+        g0 += w[i] * p[1];
+        b0 += w[i] * p[2];
+    }
+    acc[0] = r0 + r1;
+    acc[1] = g0 + g1;
+    acc[2] = b0 + b1;
+}
+
 /* Y_z / F_Y(0, ts): the sky's luminance scale, cd/m^2. */
 static inline skysh_real skysh_luminance_scale(skysh_real ts, skysh_real t)
 {
@@ -262,12 +292,15 @@ static inline skysh_real skysh_luminance_scale(skysh_real ts, skysh_real t)
  * The steps of skysh_coefficients; mode selects the per-band factor:
  * 0 none (radiance), 1 the clamped cosine (irradiance)$mode_doc.
  */
-static inline int skysh_evaluate(skysh_real sun_zenith, skysh_real turbidity, skysh_real sun_azimuth,
-                                 int gibbs, $dering_type dering, int mode, skysh_real out[SKYSH_COUNT][3])
+static inline int skysh_evaluate(skysh_real sun_zenith, skysh_real turbidity, skysh_real sun_azimuth, int gibbs,
+                                 int dering, int sun, const skysh_real *ground_albedo, int irradiance_table, int mode,
+                                 skysh_real out[SKYSH_COUNT][3])
 {
-    skysh_real tx[SKYSH_DX + 1], ty[SKYSH_DY + 1], w[SKYSH_TERMS], acc[SKYSH_HALF][3];
+    static const skysh_real black[3] = { $c0, $c0, $c0 };
+    const skysh_real *albedo = ground_albedo ? ground_albedo : black;
+    skysh_real tx[SKYSH_DX + 1], ty[SKYSH_DY + 1], w[SKYSH_TERMS], acc[SKYSH_ROWS][3], e_sky[3];
     skysh_real x, y, phi, scale;
-    int i, j, r, c, l, m;
+    int i, j, r, c, l, m, ground, post, table;
     for (i = 0; i < SKYSH_COUNT; ++i)
         out[i][0] = out[i][1] = out[i][2] = $c0;
     if (!(sun_zenith >= $zmin && sun_zenith <= $zmax) || !(turbidity >= $tmin && turbidity <= $tmax)
@@ -275,6 +308,17 @@ static inline int skysh_evaluate(skysh_real sun_zenith, skysh_real turbidity, sk
         return -1;
     if (dering && !SKYSH_DERING)
         return -2;
+    for (c = 0; c < 3; ++c)
+        if (!(albedo[c] >= $c0 && albedo[c] <= $c1))
+            return -3;
+    ground = albedo[0] != $c0 || albedo[1] != $c0 || albedo[2] != $c0;
+    if ((sun && SKYSH_LIGHTS % 2 == 0) || (ground && SKYSH_LIGHTS / 2 == 0))
+        return -4;
+    table = skysh_use_table(irradiance_table, mode, gibbs, dering);
+    if (table < 0)
+        return -5;
+    dering = dering && !table; /* the table is certified non-negative: never deringed */
+    post = dering || sun || ground; /* then step 8 follows steps 6 and 7 */
     phi = $fmod(sun_azimuth, $two_pi); /* as the runtime: exact, so k * phi stays small */
     x = sun_zenith * $x_scale - $x_shift;
     y = $log(turbidity) * $y_scale - $y_shift;
@@ -289,29 +333,14 @@ static inline int skysh_evaluate(skysh_real sun_zenith, skysh_real turbidity, sk
     for (i = 0; i <= SKYSH_DX; ++i)
         for (j = 0; j <= SKYSH_DY; ++j)
             w[i * (SKYSH_DY + 1) + j] = tx[i] * ty[j];
-    for (r = 0; r < SKYSH_HALF; ++r) { /* Habel eq. (1): six independent sums per row */
-        const skysh_real *p = SKYSH_TABLE[r];
-        skysh_real r0 = $c0, g0 = $c0, b0 = $c0, r1 = $c0, g1 = $c0, b1 = $c0;
-        for (i = 0; i + 1 < SKYSH_TERMS; i += 2, p += 6) {
-            r0 += w[i] * p[0];
-            g0 += w[i] * p[1];
-            b0 += w[i] * p[2];
-            r1 += w[i + 1] * p[3];
-            g1 += w[i + 1] * p[4];
-            b1 += w[i + 1] * p[5];
-        }
-        if (i < SKYSH_TERMS) {
-            r0 += w[i] * p[0];
-            g0 += w[i] * p[1];
-            b0 += w[i] * p[2];
-        }
-        acc[r][0] = r0 + r1;
-        acc[r][1] = g0 + g1;
-        acc[r][2] = b0 + b1;
-    }
+    for (r = 0; r < SKYSH_ROWS; ++r) /* step 3 (with the table: the sky's c_10 only) */
+        if (!table || r == 1)
+            skysh_row(SKYSH_TABLE[r], w, acc[r]);
     scale = skysh_luminance_scale(sun_zenith, turbidity);
+    for (c = 0; c < 3; ++c)
+        e_sky[c] = $hf * acc[1][c] * scale; /* E_h of the unfiltered sky (skysh.ground) */$irradiance_step
     for (l = 0; l < SKYSH_BANDS; ++l) {
-        const skysh_real band = $band_factor * scale;
+        const skysh_real band = (post ? $c1 : $factor) * scale;
         const int row = l * (l + 1) / 2; /* stored (l, 0) */
         if (gibbs)
             for (c = 0; c < 3; ++c)
@@ -323,51 +352,39 @@ static inline int skysh_evaluate(skysh_real sun_zenith, skysh_real turbidity, sk
                 out[l * (l + 1) + m][c] = acc[row + k][c] * rot * band;
         }
     }$dering_step
+    if (sun || ground)
+        skysh_add_lights(sun_zenith, turbidity, phi, sun, ground, gibbs, albedo, e_sky, out);
+    if (post && mode != 0)
+        for (l = 0; l < SKYSH_BANDS; ++l)
+            for (i = l * l; i < (l + 1) * (l + 1); ++i)
+                for (c = 0; c < 3; ++c)
+                    out[i][c] *= $factor;
     return 0;
 }
 
 /*
  * The sky's SH coefficients. Angles in radians. gibbs: apply the zonal sinc
  * filter; dering: the least window that keeps the irradiance non-negative (Sloan
- * 2017, SKYSH_DERING exports only); irradiance: convolve with the clamped cosine.
- * Returns 0, -1 (out zeroed) for a parameter outside the domain, NaN or inf, or
- * -2 (out zeroed) for dering without SKYSH_DERING.
+ * 2017, SKYSH_DERING exports only); irradiance: convolve with the clamped cosine;
+ * sun: add the sun's disk (a windowed delta); ground_albedo: NULL, or the RGB
+ * albedo in [0, 1] of a Lambertian ground lit by the sky (and the sun with sun);
+ * irradiance_table: SKYSH_BY_INTENT (the runtime's default), 0 or 1, as
+ * skysh.SkySH.coefficients' None, False, True (skysh_use_table: the certified
+ * irradiance table of 3-band exports for diffuse light, never negative).
+ * Returns 0, or (out zeroed) -1 for a parameter outside the domain, NaN or inf,
+ * -2 for dering without SKYSH_DERING, -3 for a ground albedo outside [0, 1],
+ * -4 for the sun or the ground without its table (SKYSH_LIGHTS), -5 for an
+ * irradiance_table refused (1 without SKYSH_IRRADIANCE_TABLE or with gibbs).
  */
-static inline int skysh_coefficients(skysh_real sun_zenith, skysh_real turbidity, skysh_real sun_azimuth,
-                                     int gibbs, $dering_type dering, int irradiance, skysh_real out[SKYSH_COUNT][3])
+static inline int skysh_coefficients(skysh_real sun_zenith, skysh_real turbidity, skysh_real sun_azimuth, int gibbs,
+                                     int dering, int irradiance, int sun, const skysh_real *ground_albedo,
+                                     int irradiance_table, skysh_real out[SKYSH_COUNT][3])
 {
-    return skysh_evaluate(sun_zenith, turbidity, sun_azimuth, gibbs, dering, irradiance ? 1 : 0, out);
+    return skysh_evaluate(sun_zenith, turbidity, sun_azimuth, gibbs, dering, sun, ground_albedo, irradiance_table,
+                          irradiance ? 1 : 0, out);
 }
 $engine_function
 #endif /* SKYSH_SKY_SH_H */
-""")
-
-_C_ENGINE_TABLES = """
-/* Engine "$engine": per-band factors folded before the rotation (skysh.export_js.engine_plan). */
-#define SKYSH_ENGINE_COUNT $count /* values, shape $shape */
-static const skysh_real SKYSH_ENGINE_BAND[SKYSH_BANDS] = { $band };
-"""
-
-_C_ENGINE_FUNCTION = Template("""
-/*
- * The numbers engine "$engine" takes: skysh.engines.convert(radiance, "$engine")
- * flattened row-major, shape $shape. Arguments as skysh_coefficients; returns 0,
- * or -1 / -2 (out zeroed) as skysh_coefficients.
- */
-static inline int skysh_engine_coefficients(skysh_real sun_zenith, skysh_real turbidity, skysh_real sun_azimuth,
-                                            int gibbs, $dering_type dering, skysh_real out[SKYSH_ENGINE_COUNT])
-{
-    skysh_real sh[SKYSH_COUNT][3];
-    int p;
-    const int rc = skysh_evaluate(sun_zenith, turbidity, sun_azimuth, gibbs, dering, 2, sh);
-    if (rc != 0) {
-        for (p = 0; p < SKYSH_ENGINE_COUNT; ++p)
-            out[p] = $c0;
-        return rc;
-    }
-    $lines
-    return 0;
-}
 """)
 
 _SHADER = Template("""\
@@ -379,12 +396,13 @@ _SHADER = Template("""\
 #define SKYSH_BANDS $bands
 #define SKYSH_COUNT $count
 #define SKYSH_HALF $half
+#define SKYSH_ROWS $rows
 #define SKYSH_DX $dx
 #define SKYSH_DY $dy
 #define SKYSH_DERING $has_dering
 
-// Index ((i * (SKYSH_DY + 1) + j) * SKYSH_HALF + r): RGB coefficient of T_i(x) T_j(y)
-// for stored coefficient r.
+// Index ((i * (SKYSH_DY + 1) + j) * SKYSH_ROWS + r): RGB coefficient of T_i(x) T_j(y)
+// for stored coefficient r (one band: row 1 is the unfiltered c_10, for the ground).
 $const $vec3 SKYSH_TABLE[$n_table] = $open
     $table
 $close;
@@ -392,7 +410,7 @@ $const float SKYSH_GIBBS[SKYSH_BANDS] = $gibbs;
 $const float SKYSH_LOBE[SKYSH_BANDS] = $lobe;
 // Perez A..E of luminance as (slope, intercept) in turbidity (Preetham 1999).
 $const float SKYSH_PEREZ_Y[10] = $perez;
-$engine_tables$dering_defs
+$engine_tables$dering_defs$lights$irradiance_defs
 // Y_z / F_Y(0, ts): the sky's luminance scale, cd/m^2.
 float skysh_luminance_scale(float ts, float t)
 {
@@ -407,14 +425,21 @@ float skysh_luminance_scale(float ts, float t)
 
 // The steps of skysh_coefficients; mode selects the per-band factor:
 // 0 none (radiance), 1 the clamped cosine (irradiance)$mode_doc.
-bool skysh_evaluate(float sunZenith, float turbidity, float sunAzimuth, bool gibbs, $dering_type dering, int mode,
-                    out $vec3 coeffs[SKYSH_COUNT])
+bool skysh_evaluate(float sunZenith, float turbidity, float sunAzimuth, bool gibbs, bool dering, bool sun,
+                    $vec3 groundAlbedo, int irradianceTable, int mode, out $vec3 coeffs[SKYSH_COUNT])
 {
     for (int n = 0; n < SKYSH_COUNT; ++n)
         coeffs[n] = $vec3($c0, $c0, $c0);
+    bool ground = groundAlbedo.x != $c0 || groundAlbedo.y != $c0 || groundAlbedo.z != $c0;
+    int use = skysh_use_table(irradianceTable, mode, gibbs, dering);
     if (!(sunZenith >= $zmin && sunZenith <= $zmax) || !(turbidity >= $tmin && turbidity <= $tmax)
-        || (dering && SKYSH_DERING == 0))
+        || (dering && SKYSH_DERING == 0) || !(groundAlbedo.x >= $c0 && groundAlbedo.x <= $c1)
+        || !(groundAlbedo.y >= $c0 && groundAlbedo.y <= $c1) || !(groundAlbedo.z >= $c0 && groundAlbedo.z <= $c1)
+        || (sun && SKYSH_LIGHTS % 2 == 0) || (ground && SKYSH_LIGHTS / 2 == 0) || use < 0)
         return false;
+    bool table = use == 1;
+    dering = dering && !table; // the table is certified non-negative: never deringed
+    bool post = dering || sun || ground; // then step 8 follows steps 6 and 7
     float phi = $mod(sunAzimuth, $two_pi);
     float x = clamp(sunZenith * $x_scale - $x_shift, -$c1, $c1);
     float y = clamp(log(turbidity) * $y_scale - $y_shift, -$c1, $c1);
@@ -426,19 +451,27 @@ bool skysh_evaluate(float sunZenith, float turbidity, float sunAzimuth, bool gib
         tx[i] = (i == 1) ? x : $c2 * x * tx[i - 1] - tx[i - 2];
     for (int j = 1; j <= SKYSH_DY; ++j)
         ty[j] = (j == 1) ? y : $c2 * y * ty[j - 1] - ty[j - 2];
-    $vec3 acc[SKYSH_HALF];
-    for (int r = 0; r < SKYSH_HALF; ++r)
+    $vec3 acc[SKYSH_ROWS];
+    $vec3 irr[SKYSH_ROWS];
+    for (int r = 0; r < SKYSH_ROWS; ++r) {
         acc[r] = $vec3($c0, $c0, $c0);
+        irr[r] = acc[r];
+    }
     for (int i = 0; i <= SKYSH_DX; ++i)
         for (int j = 0; j <= SKYSH_DY; ++j) {
             float w = tx[i] * ty[j];
-            int base = (i * (SKYSH_DY + 1) + j) * SKYSH_HALF;
-            for (int r = 0; r < SKYSH_HALF; ++r)
-                acc[r] += w * SKYSH_TABLE[base + r];
+            int base = (i * (SKYSH_DY + 1) + j) * SKYSH_ROWS;
+            for (int r = 0; r < SKYSH_ROWS; ++r) // step 3 (with the table: the sky's c_10 only)
+                if (!table || r == 1)
+                    acc[r] += w * SKYSH_TABLE[base + r];$irradiance_step
         }
     float scale = skysh_luminance_scale(sunZenith, turbidity);
+    $vec3 eSky = acc[1] * ($hf * scale); // E_h of the unfiltered sky (skysh.ground)
+    for (int r = 0; r < SKYSH_ROWS; ++r)
+        if (table)
+            acc[r] = irr[r];
     for (int l = 0; l < SKYSH_BANDS; ++l) {
-        float band = $band_factor * scale;
+        float band = (post ? $c1 : $factor) * scale;
         int row = l * (l + 1) / 2;
         if (gibbs)
             acc[row] *= SKYSH_GIBBS[l];
@@ -448,96 +481,28 @@ bool skysh_evaluate(float sunZenith, float turbidity, float sunAzimuth, bool gib
             coeffs[l * (l + 1) + m] = acc[row + k] * (rot * band);
         }
     }$dering_step
-    return true;
-}
-
-// The sky's SH coefficients. Angles in radians. Returns false (coeffs zeroed)
-// for a parameter outside the domain, or dering without SKYSH_DERING (3 bands).
-bool skysh_coefficients(float sunZenith, float turbidity, float sunAzimuth, bool gibbs, $dering_type dering, bool irradiance,
-                        out $vec3 coeffs[SKYSH_COUNT])
-{
-    return skysh_evaluate(sunZenith, turbidity, sunAzimuth, gibbs, dering, irradiance ? 1 : 0, coeffs);
-}
-$engine_function""")
-
-_SHADER_ENGINE_TABLES = """
-// Engine "$engine": per-band factors folded before the rotation (skysh.export_js.engine_plan).
-#define SKYSH_ENGINE_COUNT $count // values, shape $shape
-$const float SKYSH_ENGINE_BAND[SKYSH_BANDS] = $band;
-"""
-
-_SHADER_ENGINE_FUNCTION = Template("""
-// The numbers engine "$engine" takes: skysh.engines.convert(radiance, "$engine")
-// flattened row-major, shape $shape. Returns false (values zeroed) outside the domain.
-bool skysh_engine_coefficients(float sunZenith, float turbidity, float sunAzimuth, bool gibbs, $dering_type dering,
-                               out float values[SKYSH_ENGINE_COUNT])
-{
-    $vec3 sh[SKYSH_COUNT];
-    if (!skysh_evaluate(sunZenith, turbidity, sunAzimuth, gibbs, dering, 2, sh)) {
-        for (int p = 0; p < SKYSH_ENGINE_COUNT; ++p)
-            values[p] = $c0;
-        return false;
-    }
-    $lines
-    return true;
-}
-""")
-
-
-# The zenith luminance of skysh.preetham._zenith_luminance (Preetham 1999, appendix):
-# Y_z = 1000 ((4.0453 T - 4.9710) tan chi - 0.2155 T + 2.4192), chi = (4/9 - T/120)(pi - 2 ts).
-# preetham.py keeps these inline, so they are repeated here once; the tests compare
-# every export with the runtime, which would catch a difference.
-_ZENITH_CONSTANTS: dict[str, float] = {
-    "c4_9": 4.0 / 9.0, "c120": 120.0, "c1000": 1000.0,
-    "c40453": 4.0453, "c49710": 4.9710, "c02155": 0.2155, "c24192": 2.4192,
-    "pi": math.pi, "two_pi": 2.0 * math.pi, "c0": 0.0, "c1": 1.0, "c2": 2.0,
-}
-
-
-_DERING_STEP: dict[str, str] = {
-    "c": """
-    if (dering) { /* skysh.export_dering: windows d in place, returns the window (unused here) */
-        double d[SKYSH_COUNT][3], window[3];
-        for (i = 0; i < SKYSH_COUNT; ++i)
-            for (c = 0; c < 3; ++c)
-                d[i][c] = out[i][c];
-        (void)skysh_dering3(d, window);
-        for (l = 0; l < SKYSH_BANDS; ++l)
-            for (i = l * l; i < (l + 1) * (l + 1); ++i)
-                for (c = 0; c < 3; ++c)
-                    out[i][c] = (skysh_real)(d[i][c] * $factor);
-    }""",
-    "shader": """
-    if (dering) { // skysh.export_dering: windows d in place
-        float d[27];
-        float window[3];
-        for (int n = 0; n < SKYSH_COUNT; ++n) {
-            d[3 * n] = coeffs[n].x;
-            d[3 * n + 1] = coeffs[n].y;
-            d[3 * n + 2] = coeffs[n].z;
-        }
-        skysh_dering3(d, window);
+    if (sun || ground)
+        skysh_add_lights(sunZenith, turbidity, phi, sun, ground, gibbs, groundAlbedo, eSky, coeffs);
+    if (post && mode != 0)
         for (int l = 0; l < SKYSH_BANDS; ++l)
             for (int n = l * l; n < (l + 1) * (l + 1); ++n)
-                coeffs[n] = $vec3(d[3 * n], d[3 * n + 1], d[3 * n + 2]) * $factor;
-    }""",
+                coeffs[n] *= $factor;
+    return true;
 }
-"""Step 6: the deringing of :mod:`skysh.export_dering` on the rotated radiance, then step 7."""
 
-
-def _dering_parts(language: str, bands: int, factor: str, vec3: str = "") -> tuple[str, str]:
-    """(definitions, step) of the runtime's 3-band deringing in ``language`` (empty for other N)."""
-    if bands != 3:
-        return "", ""
-    from skysh import export_dering
-
-    source = export_dering.dering_source(language, target="irradiance", name="skysh_dering3")
-    if language == "c":
-        source = source.replace("\nint skysh_dering3(", "\nstatic inline int skysh_dering3(", 1)
-    step = Template(_DERING_STEP["c" if language == "c" else "shader"]).substitute(factor=factor, vec3=vec3)
-    return "\n" + source, step
-
+// The sky's SH coefficients. Angles in radians; sun adds the sun's disk, groundAlbedo
+// (RGB in [0, 1], vec3(0) for none) a Lambertian ground; irradianceTable SKYSH_BY_INTENT
+// (the runtime's default), 0 or 1 as skysh.SkySH.coefficients' irradiance_table None, False,
+// True. Returns false (coeffs zeroed) for a parameter outside the domain, dering without
+// SKYSH_DERING (3 bands), the sun or the ground without its table (SKYSH_LIGHTS), or an
+// irradianceTable refused (1 without SKYSH_IRRADIANCE_TABLE or with gibbs).
+bool skysh_coefficients(float sunZenith, float turbidity, float sunAzimuth, bool gibbs, bool dering, bool irradiance,
+                        bool sun, $vec3 groundAlbedo, int irradianceTable, out $vec3 coeffs[SKYSH_COUNT])
+{
+    return skysh_evaluate(sunZenith, turbidity, sunAzimuth, gibbs, dering, sun, groundAlbedo, irradianceTable,
+                          irradiance ? 1 : 0, coeffs);
+}
+$engine_function""")
 
 def _header(tables: ExportTables, language: str, precision: str, options: str, plan: EnginePlan | None) -> str:
     engine_text = ""
@@ -554,59 +519,53 @@ def _header(tables: ExportTables, language: str, precision: str, options: str, p
 
 
 def _common(tables: ExportTables, fmt: Callable[[float], str], plan: EnginePlan | None, language: str,
-            vec3: str = "") -> dict[str, Any]:
-    """Substitutions shared by the C and shader templates."""
+            vec3: str = "", real: str = "double") -> dict[str, Any]:
+    """Substitutions shared by the C and shader templates (and the lights' functions)."""
     one = fmt(1.0)
-    factor = f"(mode == 1 ? SKYSH_LOBE[l] : {one})"  # step 7
+    factor = f"(mode == 1 ? SKYSH_LOBE[l] : {one})"  # step 8
     if plan is not None:
         factor = f"(mode == 1 ? SKYSH_LOBE[l] : (mode == 2 ? SKYSH_ENGINE_BAND[l] : {one}))"
-    defs, step = _dering_parts(language, tables.bands, factor, vec3)
+    defs, step = dering_parts(language, tables.bands, vec3)
     return dict(
-        bands=tables.bands, count=tables.bands**2, half=len(tables.half_layout),
+        bands=tables.bands, count=tables.bands**2, half=len(tables.half_layout), rows=len(_stored_rows(tables)[0]),
         dx=tables.degrees[0], dy=tables.degrees[1],
         zmin=fmt(tables.sun_zenith_domain[0]), zmax=fmt(tables.sun_zenith_domain[1]),
         tmin=fmt(tables.turbidity_domain[0]), tmax=fmt(tables.turbidity_domain[1]),
         x_scale=fmt(tables.x_scale), x_shift=fmt(tables.x_shift),
-        y_scale=fmt(tables.y_scale), y_shift=fmt(tables.y_shift),
-        mode_doc=", 2 the engine's folded factor" if plan is not None else "",
-        band_factor=f"(dering ? {one} : {factor})",  # with deringing, step 7 follows step 6
+        y_scale=fmt(tables.y_scale), y_shift=fmt(tables.y_shift), hf=fmt(tables.lights.constants["hf"]),
+        mode_doc=", 2 the engine's folded factor" if plan is not None else "", factor=factor,
         dering_defs=defs, dering_step=step, has_dering=int(bool(step)),
-        dering_type="int" if language == "c" else "bool",
-        **{k: fmt(v) for k, v in _ZENITH_CONSTANTS.items()},
+        **irradiance_parts(language, tables.irradiance if tables.bands == 3 else None, real),
+        **{k: fmt(v) for k, v in ZENITH_CONSTANTS.items()},
     )
 
 
-def _c_value(q: int) -> str:
-    return f"sh[{q // 3}][{q % 3}]"
-
-
-def _shader_value(q: int) -> str:
-    return f"sh[{q // 3}].{'xyz'[q % 3]}"
+def _stored_rows(tables: ExportTables) -> tuple[list[str], NDArray[np.float64]]:
+    """Labels and (rows, terms, 3) of the embedded table: the stored coefficients, and for one band
+    the unfiltered c_10 (the ground's E_h; with two or more bands it is stored row 1)."""
+    by_row = tables.table.reshape(-1, len(tables.half_layout), 3).transpose(1, 0, 2)  # (r, i (DY + 1) + j, c)
+    labels = [f"(l, m) = ({l}, {m})" for l, m in tables.half_layout]
+    if tables.bands == 1:
+        by_row = np.concatenate([by_row, tables.lights.c10.reshape(1, -1, 3)])
+        labels.append("the unfiltered (1, 0), for the ground")
+    return labels, by_row
 
 
 def _c_source(tables: ExportTables, real: str, plan: EnginePlan | None) -> str:
     def fmt(v: float) -> str:
-        return _real(v, real)
+        return real_literal(v, real)
 
-    blocks = []  # one {...} per stored coefficient r, as the array is declared (no brace elision)
-    by_row = tables.table.reshape(-1, len(tables.half_layout), 3).transpose(1, 0, 2)  # (r, i (DY + 1) + j, c)
-    for (l, m), terms in zip(tables.half_layout, by_row):
+    blocks = []  # one {...} per row r, as the array is declared (no brace elision)
+    for label, terms in zip(*_stored_rows(tables)):
         triples = [", ".join(fmt(v) for v in rgb) for rgb in terms]
-        blocks.append(f"{{ /* (l, m) = ({l}, {m}) */\n        " + _rows(triples, "        ") + "\n    }")
+        blocks.append(f"{{ /* {label} */\n        " + text_rows(triples, "        ", _TRIPLES_PER_LINE) + "\n    }")
     suffix = "" if real == "double" else "f"
-    common = _common(tables, fmt, plan, "c")
-    engine_tables = engine_function = ""
-    if plan is not None:
-        engine_tables = Template(_C_ENGINE_TABLES).substitute(
-            engine=plan.engine, count=plan.offset.size, shape=plan.shape, band=", ".join(map(fmt, plan.band_factor)),
-        )
-        lines = [f"out[{p}] = {plan.expression(p, _c_value, fmt)};" for p in range(plan.offset.size)]
-        engine_function = _C_ENGINE_FUNCTION.substitute(common, engine=plan.engine, shape=plan.shape,
-                                                        lines="\n    ".join(lines))
+    common = _common(tables, fmt, plan, "c", real=real)
+    engine_tables, engine_function = c_like_engine("c", plan, common, fmt)
     return _C.substitute(
         common,
         header=_header(tables, "c", f"{real} (C {real})", "" if real == "double" else " --c-real float", plan),
-        real=real, table=",\n    ".join(blocks),
+        real=real, table=",\n    ".join(blocks), lights=c_like_lights(tables.lights, "c", real, common),
         gibbs=", ".join(map(fmt, tables.gibbs)), lobe=", ".join(map(fmt, tables.lobe)),
         perez=", ".join("{" + ", ".join(map(fmt, row)) + "}" for row in PEREZ_Y),
         tan="tan" + suffix, exp="exp" + suffix, cos="cos" + suffix, sin="sin" + suffix, log="log" + suffix,
@@ -624,23 +583,18 @@ def _shader_source(tables: ExportTables, language: str, plan: EnginePlan | None)
         items = [fmt(v) for v in values] if kind == "float" else list(values)
         return (f"{kind}[{len(items)}](" + ", ".join(items) + ")") if glsl else "{ " + ", ".join(items) + " }"
 
-    triples = [f"{vec3}(" + ", ".join(fmt(v) for v in rgb) + ")" for rgb in tables.table.reshape(-1, 3)]
+    rows = _stored_rows(tables)[1].transpose(1, 0, 2).reshape(-1, 3)  # ((i (DY + 1) + j) ROWS + r, c)
+    triples = [f"{vec3}(" + ", ".join(fmt(v) for v in rgb) + ")" for rgb in rows]
     common = _common(tables, fmt, plan, language, vec3)
-    engine_tables = engine_function = ""
-    if plan is not None:
-        engine_tables = Template(_SHADER_ENGINE_TABLES).substitute(
-            engine=plan.engine, count=plan.offset.size, shape=plan.shape, const=const, band=array(plan.band_factor),
-        )
-        lines = [f"values[{p}] = {plan.expression(p, _shader_value, fmt)};" for p in range(plan.offset.size)]
-        engine_function = _SHADER_ENGINE_FUNCTION.substitute(common, engine=plan.engine, shape=plan.shape,
-                                                             lines="\n    ".join(lines), vec3=vec3)
+    engine_tables, engine_function = c_like_engine(language, plan, common, fmt)
     table_open, table_close = (f"{vec3}[{len(triples)}](", ")") if glsl else ("{", "}")
     return _SHADER.substitute(
         common,
         header_lines=_header(tables, language, "float32", "", plan).replace("\n", "\n// "),
         const=const, vec3=vec3, n_table=len(triples), open=table_open, close=table_close,
-        table=_rows(triples, "    "), gibbs=array(tables.gibbs), lobe=array(tables.lobe), perez=array(PEREZ_Y.ravel()),
-        mod="mod" if glsl else "fmod", engine_tables=engine_tables, engine_function=engine_function,
+        table=text_rows(triples, "    ", _TRIPLES_PER_LINE), gibbs=array(tables.gibbs), lobe=array(tables.lobe),
+        perez=array(PEREZ_Y.ravel()), mod="mod" if glsl else "fmod", engine_tables=engine_tables,
+        engine_function=engine_function, lights=c_like_lights(tables.lights, language, common=common),
     )
 
 

@@ -22,9 +22,13 @@ rest of the map as straight-line code. A call validates, fills preallocated
 scratch arrays and allocates its result only (or none, given ``out``).
 
 Options follow the Python runtime's defaults by intent: ``gibbs`` defaults to
-``!irradiance`` and ``dering`` to ``irradiance``; an engine implies the diffuse
-intent (engines light with SH diffusely), so it defaults like irradiance and
-refuses ``irradiance: true`` (its map already applies the engine's scaling).
+``!irradiance`` and ``dering`` to ``irradiance``; ``irradianceTable`` (the runtime's
+``irradiance_table``, :func:`skysh.export_js_parts.js_irradiance`) takes the certified
+3-band irradiance table for diffuse light unless ``gibbs: true`` or ``dering: false``
+is asked for, ``false`` gives the filtered, deringed sky. An engine implies the
+diffuse intent (engines light with SH diffusely), so it defaults like irradiance
+(the table's radiance-equivalent at 3 bands) and refuses ``irradiance: true`` (its
+map already applies the engine's scaling).
 
 References
 ----------
@@ -48,7 +52,9 @@ from numpy.typing import NDArray
 
 from skysh import runtime, sh
 from skysh._version import __version__
-from skysh.export import _ZENITH_CONSTANTS, ExportTables, double_literal, export_tables
+from skysh.export import ExportTables, export_tables
+from skysh.export_js_parts import DECLARATIONS, irradiance_json, js_dering, js_irradiance, js_lights, lights_json
+from skysh.export_lights import ZENITH_CONSTANTS, double_literal, text_rows
 from skysh.preetham import PEREZ_Y
 
 __all__ = ["ENGINE_ZERO", "ENGINE_UNIT", "EnginePlan", "engine_plan", "module_source", "declarations", "declarations_path",
@@ -65,8 +71,6 @@ ENGINE_UNIT: float = 1e-14
 constants, built numerically): they are written as additions, changing an output by
 at most this relative amount."""
 
-_NUMBERS_PER_LINE: int = 6
-"""Numbers per line of the generated tables."""
 
 
 @dataclass(frozen=True)
@@ -196,14 +200,24 @@ _HEADER: str = '''\
  * Angles in radians: sun zenith [0, pi/2], any finite azimuth (from +X towards +Y);
  * turbidity [2.5, 6]. Frame: Z up. Real orthonormal SH with the Condon-Shortley phase.
  * Linear sRGB, cd/m^2 (irradiance: cd/m^2 x sr, lux for the luminance). Same numbers as
- * skysh.SkySH.coefficients(sun_zenith, turbidity, sun_azimuth, bands, gibbs, dering, irradiance).
+ * skysh.SkySH.coefficients(sun_zenith, turbidity, sun_azimuth, bands, gibbs, dering, irradiance,
+ * sun=..., ground_albedo=..., irradiance_table=...). sunLight(sunZenith, turbidity, sunAzimuth = 0)
+ * returns the sun as a directional light, { direction: [x, y, z] towards it, rgb: lux }, as
+ * skysh.SkySH.sun_light.
  *
  * options (all optional):
  *   bands       1 .. $max_bands (default $default_bands).
  *   irradiance  false (default): radiance; true: irradiance (clamped-cosine convolution).
- *   gibbs       the zonal sinc filter (Habel eq. 5); default !irradiance, and false with an engine.
+ *   gibbs       the zonal sinc filter (Habel eq. 5); default !irradiance, and false with an engine
+ *               or the irradiance table.
  *   dering      window so the irradiance is never negative (Sloan 2017); default irradiance (or an
- *               engine) where this module carries deringing (bands: $dering_bands).
+ *               engine) where this module carries deringing (bands: $dering_bands); never with the table.
+ *   irradianceTable  the certified 3-band irradiance table (docs/irradiance.md: never negative, no
+ *               deringing search) in place of the sky's rows: null (default) by intent, for irradiance
+ *               or an engine at 3 bands unless gibbs is true or dering false; false: never (the
+ *               filtered, deringed sky); true: always (radiance: its E_lm / A_l), refused with gibbs: true.
+ *   sun         true: add the sun's disk, a delta windowed to a non-negative irradiance; default false.
+ *   groundAlbedo a number or [r, g, b] in [0, 1]: a Lambertian ground lit by the sky (and sun); default 0.
  *   engine      the numbers the API of that engine takes: $engine_list
  *               (skysh.engines.convert of the radiance), flattened row-major, length from
  *               engineLayout(engine, bands); irradiance must then be false (the engine map
@@ -221,7 +235,7 @@ const MAX_BANDS = $max_bands;
 const DEFAULT_BANDS = $default_bands;
 const DX = $dx; // Chebyshev degree in x (sun zenith)
 const DY = $dy; // Chebyshev degree in y (log turbidity)
-const HALF3 = $half3; // 3 x stored (m >= 0) coefficients of MAX_BANDS bands
+const HALF3 = $half3; // 3 x table rows: stored (m >= 0) coefficients of MAX_BANDS bands (one band: and c_10)
 const TERMS = (DX + 1) * (DY + 1);
 const X_SCALE = $x_scale, X_SHIFT = $x_shift, Y_SCALE = $y_scale, Y_SHIFT = $y_shift;
 const ZMIN = $zmin, ZMAX = $zmax, TMIN = $tmin, TMAX = $tmax;
@@ -253,8 +267,9 @@ const ACC = new Float64Array(HALF3);
 const RADIANCE = new Float64Array(MAX_BANDS * MAX_BANDS * 3);
 const COS = new Float64Array(MAX_BANDS);
 const SIN = new Float64Array(MAX_BANDS);
-const OPTIONS = new Set(["bands", "gibbs", "irradiance", "dering", "engine", "out"]);
-$dering_defs
+const C10 = new Float64Array(3); // the unfiltered sky's c_10 (the ground's E_h), apart from the table's rows
+const OPTIONS = new Set(["bands", "gibbs", "irradiance", "dering", "irradianceTable", "sun", "groundAlbedo", "engine", "out"]);
+$dering_defs$lights$irradiance
 /** skysh's version that wrote this module. */
 export const SKYSH_VERSION = $version;
 /** Largest band count this module evaluates. */
@@ -278,6 +293,19 @@ function flag(value, name, fallback) {
   if (value === undefined) return fallback;
   if (typeof value !== "boolean") throw new TypeError(`$${name} must be true or false, got $${describe(value)}`);
   return value;
+}
+
+/** Refuse a frame outside the fitted domain, naming the parameter. */
+function checkFrame(sunZenith, turbidity, sunAzimuth) {
+  if (!(number(sunZenith, "sunZenith") >= ZMIN && sunZenith <= ZMAX)) {
+    throw new RangeError(`sunZenith must lie in [$${ZMIN}, $${ZMAX}] rad (the fitted domain), got $${sunZenith}`);
+  }
+  if (!(number(turbidity, "turbidity") >= TMIN && turbidity <= TMAX)) {
+    throw new RangeError(`turbidity must lie in [$${TMIN}, $${TMAX}] (the fitted domain), got $${turbidity}`);
+  }
+  if (!Number.isFinite(number(sunAzimuth, "sunAzimuth"))) {
+    throw new RangeError(`sunAzimuth must be finite (radians), got $${sunAzimuth}`);
+  }
 }
 
 function enginePlans(engine) {
@@ -308,43 +336,55 @@ function luminanceScale(ts, t) {
   return yz / f;
 }
 
-/** Radiance coefficients of n bands into o (coefficient-major RGB), band l times factor[l]. */
-function evaluate(ts, t, phi, n, gibbs, factor, o) {
-  let x = ts * X_SCALE - X_SHIFT;
-  let y = Math.log(t) * Y_SCALE - Y_SHIFT;
+/** Chebyshev T_0, T_1, ... at x and at y, each clamped to [-1, 1], into the whole of tx and ty. */
+function chebyshev(x, y, tx, ty) {
   x = x < -1.0 ? -1.0 : x > 1.0 ? 1.0 : x;
   y = y < -1.0 ? -1.0 : y > 1.0 ? 1.0 : y;
-  TX[0] = 1.0;
-  TY[0] = 1.0;
-  for (let i = 1; i <= DX; i++) TX[i] = i === 1 ? x : 2.0 * x * TX[i - 1] - TX[i - 2];
-  for (let j = 1; j <= DY; j++) TY[j] = j === 1 ? y : 2.0 * y * TY[j - 1] - TY[j - 2];
-  for (let i = 0, q = 0; i <= DX; i++) {
-    const xi = TX[i];
-    for (let j = 0; j <= DY; j++, q++) W[q] = xi * TY[j];
-  }
-  const h3 = ((n * (n + 1)) / 2) * 3;
-  for (let k = 0, b = 0; k < h3; k += 3) { // Habel eq. (1); six independent sums (latency)
+  tx[0] = 1.0;
+  ty[0] = 1.0;
+  for (let i = 1; i < tx.length; i++) tx[i] = i === 1 ? x : 2.0 * x * tx[i - 1] - tx[i - 2];
+  for (let j = 1; j < ty.length; j++) ty[j] = j === 1 ? y : 2.0 * y * ty[j - 1] - ty[j - 2];
+}
+
+/** Habel eq. (1) at the frame's W: the first h3 / 3 rows of the table rows (laid out as TABLE) into ACC. */
+function rowSums(rows, h3) {
+  for (let k = 0, b = 0; k < h3; k += 3) { // six independent sums (latency)
     let r0 = 0.0, g0 = 0.0, b0 = 0.0, r1 = 0.0, g1 = 0.0, b1 = 0.0, q = 0;
     for (; q + 1 < TERMS; q += 2, b += 6) {
       const w0 = W[q], w1 = W[q + 1];
-      r0 += w0 * TABLE[b];
-      g0 += w0 * TABLE[b + 1];
-      b0 += w0 * TABLE[b + 2];
-      r1 += w1 * TABLE[b + 3];
-      g1 += w1 * TABLE[b + 4];
-      b1 += w1 * TABLE[b + 5];
+      r0 += w0 * rows[b];
+      g0 += w0 * rows[b + 1];
+      b0 += w0 * rows[b + 2];
+      r1 += w1 * rows[b + 3];
+      g1 += w1 * rows[b + 4];
+      b1 += w1 * rows[b + 5];
     }
     if (q < TERMS) {
       const w0 = W[q];
-      r0 += w0 * TABLE[b];
-      g0 += w0 * TABLE[b + 1];
-      b0 += w0 * TABLE[b + 2];
+      r0 += w0 * rows[b];
+      g0 += w0 * rows[b + 1];
+      b0 += w0 * rows[b + 2];
       b += 3;
     }
     ACC[k] = r0 + r1;
     ACC[k + 1] = g0 + g1;
     ACC[k + 2] = b0 + b1;
   }
+}
+
+/** Radiance coefficients of n bands into o (coefficient-major RGB), band l times factor[l]; returns the
+ * luminance scale. The rows from TABLE, or with table the certified IRRADIANCE's; C10 the sky's c_10. */
+function evaluate(ts, t, phi, n, gibbs, factor, o, table) {
+  chebyshev(ts * X_SCALE - X_SHIFT, Math.log(t) * Y_SCALE - Y_SHIFT, TX, TY);
+  for (let i = 0, q = 0; i <= DX; i++) {
+    const xi = TX[i];
+    for (let j = 0; j <= DY; j++, q++) W[q] = xi * TY[j];
+  }
+  rowSums(TABLE, n > 1 && !table ? ((n * (n + 1)) / 2) * 3 : 6); // one band or the table: row 1 too (c_10)
+  C10[0] = ACC[3];
+  C10[1] = ACC[4];
+  C10[2] = ACC[5];
+  if (table) rowSums(IRRADIANCE, 18); // 3 bands: the table's 6 rows in place of the sky's
   const scale = luminanceScale(ts, t);
   const c1 = Math.cos(phi), s1 = Math.sin(phi);
   COS[0] = 1.0;
@@ -373,6 +413,7 @@ function evaluate(ts, t, phi, n, gibbs, factor, o) {
       o[minus + 2] = ACC[src + 2] * sp;
     }
   }
+  return scale;
 }
 
 /** Multiply band l of the n-band coefficients o by factor[l]. */
@@ -389,15 +430,7 @@ function scaleBands(o, n, factor) {
  * value of the wrong type or an unknown option.
  */
 export function coefficients(sunZenith, turbidity, sunAzimuth = 0, options = {}) {
-  if (!(number(sunZenith, "sunZenith") >= ZMIN && sunZenith <= ZMAX)) {
-    throw new RangeError(`sunZenith must lie in [$${ZMIN}, $${ZMAX}] rad (the fitted domain), got $${sunZenith}`);
-  }
-  if (!(number(turbidity, "turbidity") >= TMIN && turbidity <= TMAX)) {
-    throw new RangeError(`turbidity must lie in [$${TMIN}, $${TMAX}] (the fitted domain), got $${turbidity}`);
-  }
-  if (!Number.isFinite(number(sunAzimuth, "sunAzimuth"))) {
-    throw new RangeError(`sunAzimuth must be finite (radians), got $${sunAzimuth}`);
-  }
+  checkFrame(sunZenith, turbidity, sunAzimuth);
   if (options === null || typeof options !== "object") throw new TypeError(`options must be an object, got $${describe(options)}`);
   for (const key in options) {
     if (!OPTIONS.has(key)) throw new TypeError(`unknown option $${JSON.stringify(key)}; the options are $${[...OPTIONS].join(", ")}`);
@@ -410,11 +443,17 @@ export function coefficients(sunZenith, turbidity, sunAzimuth = 0, options = {})
     throw new RangeError("irradiance must be false with an engine: the engine map takes radiance and applies the engine's own scaling");
   }
   const diffuse = irradiance || plans !== null; // the intent: diffuse lighting
-  const gibbs = flag(options.gibbs, "gibbs", !diffuse);
-  const dering = flag(options.dering, "dering", diffuse && DERING_BANDS.includes(bands));
+  const gibbsGiven = flag(options.gibbs, "gibbs", null), deringGiven = flag(options.dering, "dering", null);
+  const table = useTable(options.irradianceTable ?? null, bands, diffuse, gibbsGiven, deringGiven);
+  const gibbs = gibbsGiven ?? !(diffuse || table);
+  const dering = !table && (deringGiven ?? (diffuse && DERING_BANDS.includes(bands))); // the table: never
   if (dering && !DERING_BANDS.includes(bands)) {
     throw new RangeError(`dering is available for bands $${DERING_BANDS.join(", ") || "(none in this module)"}, got bands $${bands}`);
   }
+  const sun = flag(options.sun, "sun", false);
+  if (sun && (LIGHTS & 1) === 0) throw new RangeError("sun needs the coefficient file's sun table: this module has none");
+  const albedo = albedoOption(options.groundAlbedo);
+  const post = dering || sun || albedo !== null; // the per-band factor then follows the dering and the lights
   const plan = plans === null ? null : plans[bands];
   const count = plan === null ? bands * bands * 3 : plan.count;
   let out = options.out;
@@ -425,11 +464,10 @@ export function coefficients(sunZenith, turbidity, sunAzimuth = 0, options = {})
   }
   const phi = sunAzimuth % TWO_PI; // exact, as the Python runtime's math.fmod
   const factor = plan !== null ? plan.band : irradiance ? LOBE : null;
-  evaluate(sunZenith, turbidity, phi, bands, gibbs, dering ? null : factor, RADIANCE);
-  if (dering) {
-    deringInPlace(RADIANCE, bands);
-    if (factor !== null) scaleBands(RADIANCE, bands, factor);
-  }
+  const scale = evaluate(sunZenith, turbidity, phi, bands, gibbs, post ? null : factor, RADIANCE, table);
+  if (dering) deringInPlace(RADIANCE, bands);
+  if (sun || albedo !== null) addLights(sunZenith, turbidity, bands, gibbs, sun, albedo, scale, RADIANCE);
+  if (post && factor !== null) scaleBands(RADIANCE, bands, factor);
   if (plan !== null) {
     plan.apply(RADIANCE, out);
   } else {
@@ -445,57 +483,6 @@ export function engineLayout(engine, bands = DEFAULT_BANDS) {
   return { shape: plan.shape, labels: plan.labels };
 }
 ''')
-
-_DECLARATIONS = Template('''\
-// skysh $version: TypeScript declarations of the ES module written by
-// `skysh export --format js$options` (the .mjs beside this file, whose header documents every option).
-
-/** Engine names the engine option takes. */
-export type Engine = $engine_union;
-
-export interface CoefficientOptions {
-  /** SH bands, an integer in [1, $max_bands]; default $default_bands. */
-  bands?: number;
-  /** Zonal sinc filter (Habel eq. 5); default !irradiance (false with an engine). */
-  gibbs?: boolean;
-  /** Irradiance instead of radiance (clamped-cosine convolution); default false; must be false with an engine. */
-  irradiance?: boolean;
-  /** Window so the irradiance is never negative; default irradiance (or an engine) where available. */
-  dering?: boolean;
-  /** Return this engine's numbers (its flat layout, see engineLayout) instead of skysh's. */
-  engine?: Engine | null;
-  /** Fill and return this array (its length must be the result's) instead of a new one. */
-  out?: number[] | Float64Array;
-}
-
-export interface EngineLayout {
-  /** The engine's array shape (row-major); the product is the result's length. */
-  readonly shape: readonly number[];
-  /** The labels of the rows (first axis) of shape, in the engine's vocabulary. */
-  readonly labels: readonly string[];
-}
-
-export declare const SKYSH_VERSION: string;
-export declare const MAX_BANDS: number;
-export declare const ENGINES: readonly Engine[];
-export declare const SUN_ZENITH_DOMAIN: readonly [number, number];
-export declare const TURBIDITY_DOMAIN: readonly [number, number];
-
-/**
- * The sky's SH coefficients for one frame: bands * bands * 3 numbers, coefficient-major RGB
- * (or the engine's values). Radians; turbidity in [2.5, 6]. Throws RangeError / TypeError.
- */
-export declare function coefficients<T extends number[] | Float64Array>(
-  sunZenith: number, turbidity: number, sunAzimuth: number | undefined, options: CoefficientOptions & { out: T },
-): T;
-export declare function coefficients(
-  sunZenith: number, turbidity: number, sunAzimuth?: number, options?: CoefficientOptions,
-): number[];
-
-/** The engine's layout for a band count (default $default_bands). */
-export declare function engineLayout(engine: Engine, bands?: number): EngineLayout;
-''')
-
 
 def json_source(tables: ExportTables, plan: EnginePlan | None = None) -> str:
     """The JSON export: float64 tables, constants and the algorithm in words (and ``plan``, if given)."""
@@ -521,10 +508,14 @@ def json_source(tables: ExportTables, plan: EnginePlan | None = None) -> str:
             "refuse sun_zenith outside domain.sun_zenith, turbidity outside domain.turbidity, non-finite azimuth",
             "x = clamp(sun_zenith * x.scale - x.shift, -1, 1); y = clamp(log(turbidity) * y.scale - y.shift, -1, 1)",
             "T_0..T_DX at x and T_0..T_DY at y (Chebyshev: T_0 = 1, T_1 = t, T_k = 2 t T_(k-1) - T_(k-2))",
-            "acc[r][c] = sum_ij T_i(x) T_j(y) table[i][j][r][c]",
+            "acc[r][c] = sum_ij T_i(x) T_j(y) table[i][j][r][c] (with the certified irradiance table, by the rule of "
+            "the block irradiance_table: its table in place of table)",
             "if gibbs: acc[r] *= gibbs[l] for the rows with m = 0",
             "acc *= luminance_scale(sun_zenith, turbidity)",
             "phi = fmod(sun_azimuth, 2 pi); out[l(l+1)+m] = acc[l(l+1)/2+|m|] * (cos(m phi) if m >= 0 else sin(|m| phi))",
+            "if dering (3 bands, not with the irradiance table): the least window of skysh.dering.dering that keeps "
+            "the irradiance non-negative, on the radiance",
+            "then the sun and the ground when asked (the blocks sun and ground), on the radiance",
             "if irradiance: out[l(l+1)+m] *= lobe[l]",
         ],
         "units": "cd/m^2 (irradiance: cd/m^2*sr)",
@@ -532,12 +523,15 @@ def json_source(tables: ExportTables, plan: EnginePlan | None = None) -> str:
         "convention": "Z up, azimuth from +X towards +Y, real orthonormal SH with the Condon-Shortley phase, "
         "index l(l+1)+m (docs/conventions.md)",
     }
+    payload.update(lights_json(tables.lights))
+    payload.update(irradiance_json(tables.irradiance if tables.bands == 3 else None))
     if plan is not None:
         payload["engine"] = {
             "name": plan.engine, "shape": list(plan.shape), "labels": list(plan.labels),
             "band_factor": plan.band_factor.tolist(), "matrix": plan.matrix.tolist(), "offset": plan.offset.tolist(),
             "algorithm": "engine values (flattened row-major to shape) = matrix @ v + offset, v = the radiance "
-            "coefficients (no irradiance) with band l times band_factor[l], flattened coefficient-major (3 i + c)",
+            "coefficients (no irradiance; by intent from the irradiance table, engines lighting diffusely) with band l "
+            "times band_factor[l], flattened coefficient-major (3 i + c)",
         }
     return json.dumps(payload, indent=1) + "\n"
 
@@ -562,9 +556,7 @@ def _engine_plans(bands: int) -> dict[str, list[EnginePlan | None]]:
 
 
 def _numbers(values: NDArray[np.float64], indent: str) -> str:
-    items = [double_literal(v) for v in np.ravel(values)]
-    lines = [", ".join(items[k : k + _NUMBERS_PER_LINE]) for k in range(0, len(items), _NUMBERS_PER_LINE)]
-    return (",\n" + indent).join(lines)
+    return text_rows([double_literal(v) for v in np.ravel(values)], indent)
 
 
 def _js_plan(plan: EnginePlan) -> str:
@@ -603,20 +595,13 @@ def module_source(sky: runtime.SkySH, bands: int | None = None) -> str:
         None (default) for all of them (7 in the shipped file). The table
         grows with it (about 200 KB of text for 7 bands).
 
-    Returns
-    -------
-    str
-        JavaScript source ending with a newline. Its header documents the API.
-
-    Raises
-    ------
-    ValueError
-        ``bands`` out of range (see :func:`skysh.export.export_tables`).
+    Returns JavaScript source ending with a newline (its header documents the API); raises a
+    ValueError for ``bands`` out of range (see :func:`skysh.export.export_tables`).
     """
     tables = export_tables(sky, sky.bands if bands is None else bands)
     n = tables.bands
     plans = _engine_plans(n)
-    dering = _dering_js(n)
+    dering = js_dering(n)
     names = textwrap.fill(", ".join(json.dumps(e) for e in plans) or "none in this module", width=90,
                           initial_indent=" " * 60, subsequent_indent=" *               ").strip()
     default = min(3, n)
@@ -625,16 +610,19 @@ def module_source(sky: runtime.SkySH, bands: int | None = None) -> str:
         dering_bands=", ".join(map(str, dering[0])) or "none", engine_list=names,
     )
     gibbs = np.concatenate([runtime.gibbs_factors(k) for k in range(1, n + 1)])
-    constants = {k: double_literal(v) for k, v in _ZENITH_CONSTANTS.items()}
+    constants = {k: double_literal(v) for k, v in ZENITH_CONSTANTS.items()}
+    rows = tables.table.reshape(-1, tables.table.shape[2], 3).transpose(1, 0, 2)  # (r, terms, c)
+    if n == 1:  # the unfiltered c_10 as row 1, for the ground (stored row 1 from two bands on)
+        rows = np.concatenate([rows, tables.lights.c10.reshape(1, -1, 3)])
     return _MODULE.substitute(
         constants,
         header=header, max_bands=n, default_bands=default, dx=tables.degrees[0], dy=tables.degrees[1],
-        half3=tables.table.shape[2] * 3,
+        half3=rows.shape[0] * 3, lights=js_lights(tables.lights), irradiance=js_irradiance(tables.irradiance),
         x_scale=double_literal(tables.x_scale), x_shift=double_literal(tables.x_shift),
         y_scale=double_literal(tables.y_scale), y_shift=double_literal(tables.y_shift),
         zmin=double_literal(tables.sun_zenith_domain[0]), zmax=double_literal(tables.sun_zenith_domain[1]),
         tmin=double_literal(tables.turbidity_domain[0]), tmax=double_literal(tables.turbidity_domain[1]),
-        table=_numbers(tables.table.reshape(-1, tables.table.shape[2], 3).transpose(1, 0, 2), "  "),
+        table=_numbers(rows, "  "),
         gibbs=_numbers(gibbs, ""), lobe=_numbers(tables.lobe, ""),
         perez=_numbers(PEREZ_Y, ""), engines=_js_engines(plans), dering_defs=dering[1],
         version=json.dumps(__version__), engine_names=", ".join(json.dumps(e) for e in plans),
@@ -655,46 +643,15 @@ def declarations(sky: runtime.SkySH, bands: int | None = None) -> str:
     """
     n = export_tables(sky, sky.bands if bands is None else bands).bands
     names = list(_engine_plans(n))
-    return _DECLARATIONS.substitute(
+    return DECLARATIONS.substitute(
         version=__version__, options=_options_text(n, sky), max_bands=n, default_bands=min(3, n),
         engine_union=" | ".join(json.dumps(e) for e in names) or "never",
     )
 
 
 def declarations_path(module_path: Path) -> Path:
-    """
-    Where the declarations of a module written to ``module_path`` go for TypeScript to find them.
-
-    ``sky.mjs`` -> ``sky.d.mts`` (TypeScript resolves an ``.mjs`` import to ``.d.mts`` only,
-    whatever its module resolution), ``sky.js`` (or any other name) -> ``sky.d.ts``.
-    """
+    """Where TypeScript finds the declarations of a module at ``module_path``: ``sky.mjs`` -> ``sky.d.mts``
+    (an ``.mjs`` import resolves to ``.d.mts`` only, whatever the module resolution), else ``sky.d.ts``."""
     path = Path(module_path)
     stem = path.name[: -len(path.suffix)] if path.suffix else path.name
     return path.with_name(stem + (".d.mts" if path.suffix == ".mjs" else ".d.ts"))
-
-
-def _dering_js(bands: int) -> tuple[tuple[int, ...], str]:
-    """
-    (band counts with deringing, JS definitions of ``DERING_BANDS`` and ``deringInPlace(c, n)``).
-
-    The runtime's 3-band deringing (:func:`skysh.export_dering.dering_source`, Sloan 2017) on
-    the flat radiance ``c``; other band counts have none (``dering: true`` is refused there).
-    """
-    if bands < 3:
-        return (), (
-            "const DERING_BANDS = Object.freeze([]); // deringing: 3 bands only\n"
-            "function deringInPlace(c, n) { throw new RangeError(`dering is not available for bands ${n}`); }\n"
-        )
-    from skysh import export_dering
-
-    return (3,), export_dering.dering_source("js", target="irradiance", name="skysh_dering3") + """\
-const DERING_BANDS = Object.freeze([3]);
-const DERING_C = [[0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0]];
-const DERING_WINDOW = [1, 1, 1];
-/** Window the 3-band radiance c (flat, coefficient-major RGB) in place, as the runtime's dering. */
-function deringInPlace(c, n) {
-  for (let k = 0; k < 27; k++) DERING_C[(k / 3) | 0][k % 3] = c[k];
-  skysh_dering3(DERING_C, DERING_WINDOW);
-  for (let k = 0; k < 27; k++) c[k] = DERING_C[(k / 3) | 0][k % 3];
-}
-"""

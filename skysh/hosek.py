@@ -50,8 +50,8 @@ References
     Radiance. ACM Trans. Graph. 31(4), 95: eq. (9), section 5.
 -   Mitsuba 3.9.1, ``include/mitsuba/render/sunsky.h``: ``eval_sky``,
     ``bezier_interp``, the RGB scale ``MI_CIE_Y_NORMALIZATION``.
--   Habel, R., Mustata, B., Wimmer, M. (2008), seed 004: the sky is zero below
-    the horizon; its projection is the ground truth.
+-   Habel et al. (2008), seed 004: as for the Preetham sky, zero below the
+    horizon, and its SH projection is the ground truth.
 """
 
 from __future__ import annotations
@@ -82,7 +82,7 @@ __all__ = [
     "BEZIER_BINOMIALS", "WAVELENGTHS", "LUMINOUS_EFFICACY", "HORIZON_OFFSET", "SKY_SH_THETA_NODES",
     "QUADRATURE_SPLIT", "MAX_THETA_NODES", "HosekDataError", "bezier_weights", "configuration", "distribution",
     "channel_radiance", "spectral_radiance", "spectral_to_xyz_weights", "tristimulus", "radiance", "luminance",
-    "sky_quadrature_rule", "sky_sh", "horizontal_irradiance", "sky_minimum",
+    "luminance_row", "sky_quadrature_rule", "sky_sh", "horizontal_irradiance", "sky_minimum",
 ]
 
 HosekDataError = _mitsuba_data.HosekDataError
@@ -404,7 +404,7 @@ def spectral_to_xyz_weights() -> NDArray[np.float64]:
 
 @lru_cache(maxsize=1)
 def _xyz_weights() -> NDArray[np.float64]:
-    cmfs = preetham._colour().MSDS_CMFS[solar.CMFS_NAME]
+    cmfs = preetham.import_colour().MSDS_CMFS[solar.CMFS_NAME]
     lam = np.asarray(cmfs.wavelengths, dtype=np.float64)
     table = np.asarray(cmfs.values, dtype=np.float64)  # (L, 3)
     hats = _hats(lam)  # (11, L), linear on every 1 nm interval (the kinks lie on integers)
@@ -459,12 +459,8 @@ def radiance(
 
     Parameters
     ----------
-    dirs
-        Unit view vectors (..., 3), Z up.
-    sun_zenith
-        Sun zenith angle, radians, [0, pi/2].
-    sun_azimuth
-        Sun azimuth, radians (from +X towards +Y), any finite value.
+    dirs, sun_zenith, sun_azimuth
+        As :func:`skysh.preetham.xyY`.
     turbidity
         [1, 10].
     albedo
@@ -497,23 +493,16 @@ def radiance(
     return values.reshape(d.shape)
 
 
-def luminance(
-    dirs: ArrayLike,
-    sun_zenith: float,
-    sun_azimuth: float,
-    turbidity: float,
-    albedo: float,
-    colourspace: str = "sRGB",
-    dataset: str = "auto",
-    ground: bool = False,
-) -> NDArray[np.float64]:
+def luminance(dirs: ArrayLike, sun_zenith: float, sun_azimuth: float, turbidity: float, albedo: float,
+              colourspace: str = "sRGB", dataset: str = "auto", ground: bool = False) -> NDArray[np.float64]:
     """Luminance Y in cd/m^2 of :func:`radiance` (same arguments): (..., 3) -> (...,), the colourspace's RGB -> Y row."""
     rgb = radiance(dirs, sun_zenith, sun_azimuth, turbidity, albedo, colourspace, dataset, ground)
-    return rgb @ _luminance_row(colourspace)
+    return rgb @ luminance_row(colourspace)
 
 
 @cache
-def _luminance_row(colourspace: str) -> NDArray[np.float64]:
+def luminance_row(colourspace: str) -> NDArray[np.float64]:
+    """The row of the colourspace's RGB -> XYZ matrix that gives Y (luminance), (3,), read-only, cached."""
     row = np.linalg.inv(preetham.rgb_from_xyz_matrix(colourspace))[1].copy()
     row.flags.writeable = False
     return row
@@ -645,13 +634,6 @@ def _horizontal_irradiance(ts: float, t: float, a: float, colourspace: str, kind
     return out
 
 
-_MIN_GRID_STEP: float = math.radians(2.0)
-"""Spacing of the coarse grid that seeds :func:`sky_minimum`, radians (as :func:`skysh.preetham.sky_minimum`)."""
-
-_MIN_REFINE: tuple[int, ...] = (20, 20)
-"""Each refinement searches a (2k+1)^2 grid spanning +-1 previous step around the best node."""
-
-
 def sky_minimum(
     sun_zenith: float, turbidity: float, albedo: float, colourspace: str = "sRGB", dataset: str = "auto"
 ) -> NDArray[np.float64]:
@@ -672,35 +654,14 @@ def sky_minimum(
 
     Notes
     -----
-    The search of :func:`skysh.preetham.sky_minimum` (2-degree grid, two local
-    41 x 41 grids each 20 times finer), clipped to the hemisphere.
+    The search of :func:`skysh.preetham.hemisphere_minimum`.
     """
     ts, t, a = _check_scalars(sun_zenith, turbidity, albedo)
     kind = _resolve(dataset, colourspace)
-    row = _luminance_row(colourspace)
+    row = luminance_row(colourspace)
 
-    def values(theta: NDArray, phi: NDArray) -> NDArray:
-        st = np.sin(theta)
-        d = np.stack([st * np.cos(phi), st * np.sin(phi), np.cos(theta)], axis=-1)
+    def values(d: NDArray) -> NDArray:
         rgb = _rgb(d.reshape(-1, 3), ts, 0.0, t, a, colourspace, kind).reshape(d.shape)
         return np.concatenate([rgb, (rgb @ row)[..., None]], axis=-1)
 
-    step = _MIN_GRID_STEP
-    theta = np.linspace(0.0, math.pi / 2.0, round(math.pi / 2.0 / step) + 1)
-    phi = np.linspace(0.0, math.pi, round(math.pi / step) + 1)
-    th, ph = (x.ravel() for x in np.meshgrid(theta, phi, indexing="ij"))
-    grid = values(th, ph)
-    best = np.argmin(grid, axis=0)
-    centre = np.stack([th[best], ph[best]], axis=-1)  # (4, 2)
-    out = grid[best, np.arange(4)]
-    for k in _MIN_REFINE:
-        offsets = np.linspace(-step, step, 2 * k + 1)
-        step = step / k
-        oth, oph = (x.ravel() for x in np.meshgrid(offsets, offsets, indexing="ij"))
-        cth = np.clip(centre[:, 0, None] + oth, 0.0, math.pi / 2.0)
-        cph = np.clip(centre[:, 1, None] + oph, 0.0, math.pi)
-        local = values(cth, cph)[np.arange(4), :, np.arange(4)]
-        best = np.argmin(local, axis=1)
-        centre = np.stack([cth[np.arange(4), best], cph[np.arange(4), best]], axis=-1)
-        out = np.minimum(out, local[np.arange(4), best])
-    return out
+    return preetham.hemisphere_minimum(values)

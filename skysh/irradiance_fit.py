@@ -19,65 +19,31 @@ is imported inside the functions that solve.
 -   :func:`constrained_irradiance_grid`: the optimum over a (sun zenith, turbidity) grid.
 -   :func:`fit_irradiance_table`, :func:`evaluate_irradiance_table`: the optimum as a
     Chebyshev table in the sky table's form (:mod:`skysh.fit`).
+-   :func:`build_table`: the coefficient file's irradiance table, measured and certified.
 
 Coefficients are **irradiance** SH (E(l, m) = A_l L(l, m), cd/m^2 x sr, linear RGB)
 in the layout of ``docs/conventions.md`` (real, orthonormal, Condon-Shortley phase,
 index l (l + 1) + m), shaped (9, 3); :func:`radiance_equivalent` divides by A_l.
 
-The certificate (S-lemma for one quadratic equality)
-----------------------------------------------------
-With the closed forms of the convention's table (k1 = sqrt(3) / (2 sqrt(pi)),
-K1 = sqrt(15) / (2 sqrt(pi)), K0 = sqrt(5) / (4 sqrt(pi)), K2 = sqrt(15) / (4 sqrt(pi)),
-Y00 = 1 / (2 sqrt(pi)); note the minus signs of the Condon-Shortley phase)::
+The certificate (S-lemma for one quadratic equality; derivation: ``docs/irradiance.md``)
+--------------------------------------------------------------------------------------
+A 3-band function is f(w) = c + g.w + w^T A w on the sphere (:func:`quadratic_parts`; the
+closed forms of the convention's table, with the Condon-Shortley minus signs). For any
+real mu and |w| = 1, f(w) = (1, w) M(mu) (1, w)^T with ``M(mu) = [[c + mu, g^T / 2],
+[g / 2, A - mu I]]`` (:func:`lifted_matrix`): M(mu) PSD for some mu => f >= 0, and
+conversely (no duality gap for one quadratic equality: More and Sorensen 1983; Stern and
+Wolkowicz 1995; Polik and Terlaky 2007), so "f >= 0 on the sphere" is exactly a 4 x 4
+linear matrix inequality in the coefficients: exact, not a relaxation. A margin s
+(f >= s) is the same for M(mu) - s e_0 e_0^T; :func:`constrained_coefficients` uses
+s = margin x mean(f), mean(f) = Y00 e0, linear in the unknowns. :func:`sphere_minimum`
+evaluates the dual max_mu d(mu) = min_sphere f by bisection on the secular equation.
 
-    f(w) = Y00 e0 - k1 e1 y + k1 e2 z - k1 e3 x + K1 e4 xy - K1 e5 yz
-           + K0 e6 (3 z^2 - 1) - K1 e7 xz + K2 e8 (x^2 - y^2)
-         = c + g.w + w^T A w,
-    c = Y00 e0 - K0 e6,   g = k1 (-e3, -e1, e2),
-    A = [[ K2 e8,     K1 e4 / 2, -K1 e7 / 2],
-         [ K1 e4 / 2, -K2 e8,    -K1 e5 / 2],
-         [-K1 e7 / 2, -K1 e5 / 2, 3 K0 e6  ]].
-
-For any real mu and |w| = 1, mu (1 - |w|^2) = 0, so f(w) = (1, w) M(mu) (1, w)^T with
-``M(mu) = [[c + mu, g^T / 2], [g / 2, A - mu I]]``. Hence
-
-*   **sufficient**: M(mu) PSD for some mu => f >= 0 on the sphere;
-*   **necessary**: by the Schur complement, M(mu) is PSD iff mu <= lambda_1 = lambda_min(A)
-    and d(mu) = c + mu - g^T (A - mu I)^+ g / 4 >= 0 (g in the range of A - mu I).
-    d is the Lagrange dual function of min_{|w|=1} f (the minimum over R^3 of the
-    convex function c + mu + g.w + w^T (A - mu I) w). There is no duality gap: write
-    A = Q diag(lambda) Q^T, h = Q^T g, and w(mu) = -(A - mu I)^{-1} g / 2, whose norm
-    grows monotonically on mu < lambda_1. If |w(mu)| reaches 1 at some mu*, w(mu*) is
-    on the sphere and minimises the convex function over all of R^3, so
-    min_sphere f <= f(w(mu*)) = d(mu*) <= min_sphere f. Otherwise (the "hard case": h
-    has no component on lambda_1's eigenvectors q1 and |w(lambda_1)| < 1) take
-    mu = lambda_1 and w = w(lambda_1) + tau q1 with |w| = 1: the convex function is
-    flat along q1, so this is again a global minimiser on the sphere. Thus
-    max_mu d(mu) = min_sphere f (More and Sorensen 1983; Stern and Wolkowicz 1995;
-    the S-lemma with an equality, Polik and Terlaky 2007), and f >= 0 on the sphere
-    iff some M(mu) is PSD: exact, not a relaxation.
-
-A margin s (f >= s on the sphere) is the same statement for f - s, i.e. M(mu) - s
-e_0 e_0^T PSD; :func:`constrained_coefficients` uses s = margin x mean(f) with
-mean(f) = Y00 e0, linear in the unknowns. :func:`sphere_minimum` evaluates max_mu d(mu)
-itself by bisection on the secular equation |w(mu)| = 1 (a valid lower bound at
-every step, by weak duality).
-
-Colour
-------
-The CIE 1976 chromaticity of XYZ is u' = 4X / D, v' = 9Y / D with D = X + 15Y + 3Z
-(CIE 15:2004). For the truth's (u'_t, v'_t) at a normal and a reconstruction
-XYZ_r (linear in the unknowns) with D_r > 0, the u'v' distance is
-|(4X_r - u'_t D_r, 9Y_r - v'_t D_r)| / D_r; so "distance <= eps" is exactly the
-second-order cone |(4X_r - u'_t D_r, 9Y_r - v'_t D_r)| <= eps D_r (which also
-forces D_r >= 0): convex, linear in the three channels together.
-:attr:`Objective.chroma` imposes it at the lit optimisation normals.
-
-Symmetry: with the sun at azimuth 0 the sky, hence its irradiance, is symmetric in
-y -> -y, and so are both objectives and the constraint; the problems are convex,
-so a symmetrised optimum is optimal and the solutions are sought with the m < 0
-coefficients (odd in y) at zero: 6 unknowns per channel, the rows of
-:data:`HALF_ROWS` (the m >= 0 layout of the fitted tables).
+Colour and symmetry (derivations: ``docs/irradiance.md``)
+--------------------------------------------------------
+"CIE 1976 u'v' distance to the truth <= eps" at a normal is exactly a second-order cone,
+linear in the three channels together (:attr:`Objective.chroma`). With the sun at azimuth 0
+the problems are symmetric in y -> -y and convex, so the m < 0 coefficients are zero at an
+optimum: 6 unknowns per channel, the rows of :data:`HALF_ROWS`.
 
 References
 ----------
@@ -94,7 +60,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from functools import lru_cache
 from typing import Any
 
@@ -109,7 +75,8 @@ __all__ = [
     "METHODS", "TRUTH_BANDS", "TRUTH_THETA_NODES", "OPTIMISATION_NORMALS", "LP_EXPONENT", "BLEND_WEIGHT",
     "CHROMA_FLOOR", "Objective", "RECOMMENDED", "quadratic_parts", "lifted_matrix", "sphere_minimum", "radiance_equivalent",
     "true_irradiance", "half_sphere_normals", "constrained_coefficients", "constrained_point",
-    "constrained_irradiance_grid", "fit_irradiance_table", "evaluate_irradiance_table",
+    "constrained_irradiance_grid", "fit_irradiance_table", "evaluate_irradiance_table", "FIT_ERROR_POINTS",
+    "NONNEG_POINTS", "HELD_OUT_SEED", "build_table",
 ]
 
 Y00: float = 0.5 / math.sqrt(math.pi)
@@ -160,24 +127,19 @@ MU_MATRIX: NDArray[np.float64] = np.diag([1.0, -1.0, -1.0, -1.0])
 MU_MATRIX.flags.writeable = False
 
 METHODS: tuple[str, ...] = ("l2", "minimax", "minimax_free", "lp", "blend")
-"""Objectives: ``"l2"`` closest in L2 (coefficient distance; Parseval) subject to f >=
-margin x mean; ``"minimax"`` smallest worst error over the normals subject to the same;
-``"minimax_free"`` the same without the constraint (the floor of three bands);
-``"lp"`` the L_p norm (p = :data:`LP_EXPONENT`) of the error over the normals,
-subject to the constraint: a smooth, strictly convex blend between L2 and minimax;
-``"blend"`` the worst error plus ``weight`` times the squared relative RMS error
-over the sphere (from the coefficients, by Parseval), subject to the constraint:
-strictly convex, hence a unique optimum that moves continuously with the sky."""
+"""Objectives: ``"l2"`` closest in L2 (coefficient distance; Parseval) subject to f >= margin x
+mean; ``"minimax"`` smallest worst error over the normals subject to the same; ``"minimax_free"``
+the same unconstrained (the floor of three bands); ``"lp"`` the L_p norm (p = :data:`LP_EXPONENT`)
+of the error over the normals, constrained; ``"blend"`` the worst error plus ``weight`` times the
+squared relative RMS error (Parseval), constrained: strictly convex, a unique optimum."""
 
 BLEND_WEIGHT: float = 1.0
 """Default weight of the squared relative RMS error in the ``"blend"`` objective."""
 
 TRUTH_BANDS: int = 32
-"""Bands of the true irradiance the worst-case objectives are taken against. Its
-tail (A_l ~ l^-2.5 times the sky's slowly falling coefficients: the sky jumps to
-zero at the horizon) leaves at most about 5e-4 of the mean irradiance against 64
-bands, at the normals next to the nadir (``tools/irradiance_study.py`` prints the
-convergence table); a worst-case error of several percent is not moved by that."""
+"""Bands of the true irradiance the worst-case objectives are taken against: its tail leaves
+at most about 5e-4 of the mean irradiance against 64 bands, next to the nadir
+(``tools/irradiance_study.py`` prints the convergence table), far below a worst error of percents."""
 
 TRUTH_THETA_NODES: int = 40
 """Zenith nodes per panel of the sky quadrature for :data:`TRUTH_BANDS` bands: within
@@ -185,16 +147,12 @@ about 1e-7 of the mean irradiance of the default 64 nodes at 32 bands (printed b
 study), at a third of the cost."""
 
 OPTIMISATION_NORMALS: int = 4096
-"""Fibonacci-sphere size whose y >= 0 half (plus the poles) carries the worst-case
-objectives and the colour constraint: about 2,050 normals, about 3.2 degrees apart.
-The study measures on 12,168 other normals, so its figures include what falls
-between these."""
+"""Fibonacci-sphere size whose y >= 0 half (plus the poles) carries the worst-case objectives and
+the colour constraint: about 2,050 normals, 3.2 degrees apart (the study measures on 12,168 others)."""
 
 CHROMA_FLOOR: float = 0.05
-"""The colour constraint applies where the true luminance irradiance is at least this
-fraction of its mean: below it (next to the nadir, where the truth falls to 0) a
-surface receives less than a twentieth of the average light and its chromaticity
-is ill-conditioned."""
+"""The colour constraint applies where the true luminance irradiance is at least this fraction of
+its mean: below it (next to the nadir) the chromaticity of a twentieth of the light is ill-conditioned."""
 
 LP_EXPONENT: int = 8
 """Exponent p of the ``"lp"`` blend: large enough to weigh the worst normals, small
@@ -205,11 +163,13 @@ _BISECTION_STEPS: int = 200
 function scaled by its largest coefficient): the bracket ends at adjacent floats, or
 narrower than 2^-200 (1e-60), where d's error is below any rounding."""
 
+_NEAR_GAP: float = 1e-6
+"""Gap lambda_i - mu (of the function scaled to a largest coefficient 1) below which
+:func:`sphere_minimum`'s direction takes component i from the norm constraint, not -h_i / (2 gap)."""
+
 _SOLVER_OPTIONS: dict[str, Any] = {}
-"""Clarabel's defaults (gap and feasibility tolerances 1e-8 on the problem scaled so the
-true mean irradiance is 1): far below every figure the study prints. Tighter (1e-9)
-ends "optimal_inaccurate" on some worst-case problems, whose optimum sits on a face
-of many active normals."""
+"""Clarabel's defaults (tolerances 1e-8 on the problem scaled so the true mean irradiance is 1), far
+below every figure the study prints; 1e-9 ends "optimal_inaccurate" on some worst-case problems."""
 
 _REPAIR_LIMIT: float = 1e-6
 """Largest constraint shortfall (of the mean) that :func:`constrained_coefficients`
@@ -232,17 +192,10 @@ def _as_coeffs(coeffs: ArrayLike, name: str = "coeffs") -> tuple[NDArray[np.floa
 
 def quadratic_parts(coeffs: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:
     """
-    The polynomial form f(w) = c + g.w + w^T A w of 3-band SH (closed forms in the module docstring).
+    The polynomial form f(w) = c + g.w + w^T A w of 3-band SH (closed forms: ``docs/irradiance.md``).
 
-    Parameters
-    ----------
-    coeffs
-        (9,) or (..., 9, C) coefficients (any unit).
-
-    Returns
-    -------
-    c, g, A
-        Shapes (..., C), (..., C, 3) and (..., C, 3, 3) (without the C axis for (9,) input).
+    ``coeffs`` (9,) or (..., 9, C), any unit. Returns c, g, A of shapes (..., C), (..., C, 3) and
+    (..., C, 3, 3) (without the C axis for (9,) input).
     """
     e, vector = _as_coeffs(coeffs)
     e = np.moveaxis(e, -2, -1)  # (..., C, 9)
@@ -255,20 +208,9 @@ def lifted_matrix(coeffs: ArrayLike, mu: ArrayLike, margin: float = 0.0) -> NDAr
     """
     The certificate matrix M(mu) - margin x mean(f) e_0 e_0^T (module docstring).
 
-    Parameters
-    ----------
-    coeffs
-        (9,) or (..., 9, C) 3-band coefficients.
-    mu
-        Multiplier, broadcasting with (..., C) (or scalar for (9,) input).
-    margin
-        Required minimum as a fraction of the function's mean Y00 e0 (0 for f >= 0).
-
-    Returns
-    -------
-    ndarray
-        (..., C, 4, 4), or (4, 4) for (9,) input; rows and columns ordered (1, x, y, z).
-        PSD for some mu iff f >= margin x mean on the sphere.
+    ``coeffs`` (9,) or (..., 9, C); ``mu`` the multiplier, broadcasting with (..., C); ``margin``
+    the required minimum as a fraction of the mean Y00 e0. Returns (..., C, 4, 4) ((4, 4) for
+    (9,) input), rows and columns (1, x, y, z): PSD for some mu iff f >= margin x mean.
     """
     e, vector = _as_coeffs(coeffs)
     e = np.moveaxis(e, -2, -1)
@@ -281,22 +223,10 @@ def sphere_minimum(coeffs: ArrayLike, return_dirs: bool = False) -> Any:
     """
     Exact minimum of 3-band SH functions over the unit sphere (the dual of the module docstring).
 
-    Parameters
-    ----------
-    coeffs
-        (9,) or (..., 9, C) coefficients.
-    return_dirs
-        Also return a unit vector where the minimum is attained.
-
-    Returns
-    -------
-    minimum : ndarray or float
-        (..., C) (a float for (9,) input), in the coefficients' unit: max_mu d(mu),
-        a lower bound at every bisection step (weak duality) that equals the
-        minimum to rounding once converged (:data:`_BISECTION_STEPS`).
-    dirs : ndarray
-        (..., C, 3) argmin directions (f there exceeds the minimum by rounding only),
-        if ``return_dirs``.
+    ``coeffs``: (9,) or (..., 9, C). Returns the minimum, (..., C) (a float for (9,) input), in
+    the coefficients' unit: max_mu d(mu), a lower bound at every bisection step (weak duality)
+    equal to the minimum to rounding once converged (:data:`_BISECTION_STEPS`); and with
+    ``return_dirs`` (..., C, 3) unit directions where it is attained (to rounding).
 
     Notes
     -----
@@ -335,9 +265,14 @@ def sphere_minimum(coeffs: ArrayLike, return_dirs: bool = False) -> Any:
         minimum = minimum[..., 0]
     if not return_dirs:
         return float(minimum) if vector else minimum
-    # Hard case (|w| < 1 at the converged mu): complete along the smallest eigenvector.
-    missing = np.sqrt(np.maximum(0.0, 1.0 - np.sum(y * y, axis=-1)))
-    y[..., 0] += np.copysign(missing, y[..., 0])
+    # Components whose gap is at rounding level (the hard case and its neighbours) are inaccurate:
+    # they take the norm the others leave, along -h (along the smallest eigenvector when h = 0 there).
+    near = gap <= _NEAR_GAP
+    far = np.sum(np.where(near, 0.0, y * y), axis=-1, keepdims=True)
+    hn = np.where(near, -h, 0.0)
+    hn[..., 0] = np.where(np.sum(hn * hn, axis=-1) > 0.0, hn[..., 0], 1.0)
+    missing = np.sqrt(np.maximum(0.0, 1.0 - far) / np.sum(hn * hn, axis=-1, keepdims=True))
+    y = np.where(near, hn * missing, y)
     w = np.einsum("...ij,...j->...i", q, y)
     w /= np.linalg.norm(w, axis=-1, keepdims=True)
     return (float(minimum), w[..., 0, :]) if vector else (minimum, w)
@@ -533,31 +468,15 @@ def constrained_coefficients(
     """
     One sky's optimal 3-band irradiance subject to f >= margin x mean(f) in every channel.
 
-    Parameters
-    ----------
-    truth
-        (K, 3) true irradiance SH of a sky with its sun at azimuth 0 (K = N^2 >= 9;
-        :func:`true_irradiance`); the L2 objective uses its first 9 rows, the
-        worst-case objectives and the colour constraint the whole series at the
-        normals of :func:`half_sphere_normals`.
-    objective
-        :class:`Objective`.
-    colourspace
-        The truth's RGB space (for the colour constraint's XYZ).
+    ``truth``: (K, 3) true irradiance SH of a sky with its sun at azimuth 0 (K = N^2 >= 9;
+    :func:`true_irradiance`); L2 uses its first 9 rows, the worst-case objectives and the colour
+    constraint the whole series at :func:`half_sphere_normals`. ``objective``: :class:`Objective`.
+    ``colourspace``: the truth's RGB space (for the colour constraint's XYZ).
 
-    Returns
-    -------
-    coeffs, info
-        (9, 3) irradiance coefficients (m < 0 rows zero), and ``objective`` the
-        optimal value (on the problem scaled so each true mean is 1), ``minimum``
-        (3,) the exact minimum over the sphere relative to the function's mean
-        (:func:`sphere_minimum`), ``repair`` (3,) the solver's feasibility
-        shortfall made good (:func:`_repair`), ``status``.
-
-    Raises
-    ------
-    RuntimeError
-        If the solver does not report an optimal solution.
+    Returns (9, 3) irradiance coefficients (m < 0 rows zero) and ``info``: ``objective`` the
+    optimal value (problem scaled so each true mean is 1), ``minimum`` (3,) the exact minimum
+    relative to the mean (:func:`sphere_minimum`), ``repair`` (3,) the feasibility shortfall
+    made good (:func:`_repair`), ``status``. RuntimeError if the solver does not end optimal.
     """
     t = as_float_array(truth, "truth")
     if t.ndim != 2 or t.shape[1] != 3 or t.shape[0] < 9 or math.isqrt(t.shape[0]) ** 2 != t.shape[0]:
@@ -597,19 +516,18 @@ def _repair(coeffs: NDArray, margin: float) -> NDArray:
     return shortfall
 
 
-def constrained_point(job: tuple[float, float, Objective]) -> tuple[NDArray[np.float64], dict[str, Any]]:
+def constrained_point(job: tuple) -> tuple[NDArray[np.float64], dict[str, Any]]:
     """
-    :func:`constrained_coefficients` at one (sun_zenith, turbidity, objective); top level, so process pools can pickle it.
+    :func:`constrained_coefficients` at one (sun_zenith, turbidity, objective[, colourspace]); top level, so
+    process pools can pickle it (colourspace default sRGB).
 
     The truth is :func:`true_irradiance` at :data:`TRUTH_BANDS` when the objective
     needs normals, else 3 bands at the projection's default nodes (all L2 needs).
     """
-    sun_zenith, turbidity, objective = job
-    if objective.needs_normals:
-        truth = true_irradiance(sun_zenith, turbidity)
-    else:
-        truth = true_irradiance(sun_zenith, turbidity, 3, None)
-    return constrained_coefficients(truth, objective)
+    sun_zenith, turbidity, objective, colourspace = (*job, "sRGB")[:4]
+    bands, nodes = (TRUTH_BANDS, TRUTH_THETA_NODES) if objective.needs_normals else (3, None)
+    truth = true_irradiance(sun_zenith, turbidity, bands, nodes, colourspace)
+    return constrained_coefficients(truth, objective, colourspace)
 
 
 def constrained_irradiance_grid(
@@ -617,6 +535,7 @@ def constrained_irradiance_grid(
     turbidity: ArrayLike,
     objective: Objective = RECOMMENDED,
     mapper: Callable[[Callable, Iterable], Iterable] = map,
+    colourspace: str = "sRGB",
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """
     The constrained optimum over the product grid of ``sun_zenith`` x ``turbidity``.
@@ -632,11 +551,13 @@ def constrained_irradiance_grid(
     mapper
         ``map``-like callable (e.g. a process pool's ``map``); results must come
         back in order. Same inputs, same output (Clarabel is deterministic).
+    colourspace
+        colour-science RGB colourspace of the truth and of the result.
 
     Returns
     -------
     coeffs, minimum
-        (n_ts, n_t, 9, 3) **irradiance** coefficients (cd/m^2 x sr, linear sRGB,
+        (n_ts, n_t, 9, 3) **irradiance** coefficients (cd/m^2 x sr, linear RGB,
         sun at azimuth 0, m < 0 rows zero; :func:`radiance_equivalent` for the
         radiance form), and (n_ts, n_t, 3) their exact minima relative to the mean.
     """
@@ -646,7 +567,7 @@ def constrained_irradiance_grid(
         raise ValueError(f"sun_zenith and turbidity must be 1-D, got shapes {ts.shape} and {tu.shape}")
     if not isinstance(objective, Objective):
         raise TypeError(f"objective must be an irradiance_fit.Objective, got {objective!r}")
-    results = list(mapper(constrained_point, [(float(a), float(b), objective) for a in ts for b in tu]))
+    results = list(mapper(constrained_point, [(float(a), float(b), objective, colourspace) for a in ts for b in tu]))
     coeffs = np.stack([r[0] for r in results]).reshape(ts.size, tu.size, 9, 3)
     minimum = np.stack([r[1]["minimum"] for r in results]).reshape(ts.size, tu.size, 3)
     return coeffs, minimum
@@ -661,23 +582,13 @@ def fit_irradiance_table(
     """
     Fit irradiance coefficients at points with the sky table's polynomial (:func:`skysh.fit.fit_table`).
 
-    Parameters
-    ----------
-    sun_zenith, turbidity
-        (P,) points (radians; turbidity).
-    coeffs
-        (P, 9, 3) irradiance coefficients at the points (m < 0 rows ignored: zero).
-    degrees
-        (d_theta, d_tau) for every band.
+    ``sun_zenith``, ``turbidity``: (P,) points (radians; turbidity); ``coeffs``: (P, 9, 3)
+    irradiance coefficients there (m < 0 rows ignored); ``degrees``: (d_theta, d_tau), every band.
 
-    Returns
-    -------
-    table, degrees, condition
-        (n_terms, 6, 3) Chebyshev coefficients of the **radiance-equivalent**
-        m >= 0 rows divided by the luminance scale (the sky table's exact form:
-        the runtime multiplies by A_l as for the sky), the (3, 2) degrees, and
-        the largest condition number solved. Residuals are weighted by the
-        inverse of each point's mean irradiance per channel.
+    Returns the (n_terms, 6, 3) Chebyshev coefficients of the **radiance-equivalent** m >= 0 rows
+    over the luminance scale (the sky table's exact form; the runtime multiplies by A_l), the
+    (3, 2) degrees and the largest condition number solved. Residuals are weighted by the inverse
+    of each point's mean irradiance per channel.
     """
     e = as_float_array(coeffs, "coeffs")
     if e.ndim != 3 or e.shape[1:] != (9, 3):
@@ -696,3 +607,85 @@ def evaluate_irradiance_table(
     out = np.zeros((half.shape[0], 9, 3))
     out[:, list(HALF_ROWS)] = half
     return out * LOBE[:, None]
+
+
+FIT_ERROR_POINTS: tuple[int, int] = (128, 8)
+"""Held-out points solved exactly for the table's fit error: random ones plus the 4 corners, and per edge."""
+
+NONNEG_POINTS: tuple[int, int] = (10_000, 500)
+"""Held-out points of the non-negativity certificate: random ones plus the 4 corners, and per edge (12,004)."""
+
+HELD_OUT_SEED: int = 2018
+"""Seed of the fit-error points (the certificate's: + 7); the sky table's is 2008."""
+
+
+def _held_out(counts: tuple[int, int], seed: int) -> tuple[NDArray, NDArray]:
+    """:func:`skysh.fit.held_out_points` (corners included) plus :func:`skysh.fit.edge_points`."""
+    ts, tu = fit.held_out_points(counts[0], seed)
+    ets, etu = fit.edge_points(counts[1], seed + 1)
+    return np.concatenate([ts, ets]), np.concatenate([tu, etu])
+
+
+def build_table(
+    grid: tuple[int, int], degrees: tuple[int, int] = (13, 7), objective: Objective = RECOMMENDED,
+    colourspace: str = "sRGB", mapper: Callable[[Callable, Iterable], Iterable] = map,
+    held_out: tuple[int, int] = FIT_ERROR_POINTS,
+) -> tuple[NDArray[np.float64], NDArray[np.int64], dict[str, Any]]:
+    """
+    The coefficient file's irradiance table and its metadata block (``tools/fit_sky.py``).
+
+    Solves ``objective`` on the sky table's Chebyshev ``grid`` (:func:`constrained_irradiance_grid`),
+    fits it (:func:`fit_irradiance_table`, ``degrees``), measures the fit error against exact
+    solves at ``held_out`` points (:data:`FIT_ERROR_POINTS`) and certifies the result: the exact
+    minimum (:func:`sphere_minimum`) of the tabulated irradiance at :data:`NONNEG_POINTS`.
+    Deterministic (the same grid, points and solver give the same bytes).
+
+    Returns
+    -------
+    table, degrees, block
+        (n_terms, 6, 3), (3, 2) and the ``tables.irradiance`` block: ``objective``, ``margin``,
+        ``fit_error``, ``nonnegativity`` (``negative`` points, ``lowest`` minimum / mean), settings.
+
+    Raises
+    ------
+    RuntimeError
+        If the tabulated irradiance is negative at any certificate point (raise the margin).
+    """
+    from importlib.metadata import version
+
+    gts, gtu = fit.chebyshev_grid(grid)
+    coeffs, grid_min = constrained_irradiance_grid(gts.reshape(grid)[:, 0], gtu.reshape(grid)[0], objective, mapper,
+                                                   colourspace)
+    table, per_band, condition = fit_irradiance_table(gts, gtu, coeffs.reshape(-1, 9, 3), degrees)
+    hts, htu = _held_out(held_out, HELD_OUT_SEED)
+    exact = np.stack([r[0] for r in mapper(constrained_point, [(a, b, objective, colourspace)
+                                                                for a, b in zip(hts.tolist(), htu.tolist())])])
+    d = evaluate_irradiance_table(table, per_band, hts, htu) - exact
+    error = np.max(np.maximum(-sphere_minimum(d), -sphere_minimum(-d)) / (Y00 * exact[:, 0]), axis=1)
+    nts, ntu = _held_out(NONNEG_POINTS, HELD_OUT_SEED + 7)
+    dense = evaluate_irradiance_table(table, per_band, nts, ntu)
+    lowest = np.min(sphere_minimum(dense) / (Y00 * dense[:, 0]), axis=1)
+    negative, k, w = int(np.sum(lowest < 0.0)), int(np.argmin(lowest)), int(np.argmax(error))
+    if negative:
+        raise RuntimeError(f"the tabulated irradiance is negative at {negative} of {nts.size} held-out points (lowest "
+                           f"{lowest[k]:.3g} of the mean): raise the objective's margin ({objective.margin:g})")
+    kinds = "uniform random in (sun zenith, T), the 4 corners, {} per edge"
+    block = {
+        "description": "3-band sky irradiance closest to the true one subject to being non-negative on the whole sphere "
+        "(skysh.irradiance_fit, issue 18), tabulated in the sky table's form",
+        "objective": {**asdict(objective), "chroma_floor": CHROMA_FLOOR, "truth_bands": TRUTH_BANDS,
+                      "truth_theta_nodes": TRUTH_THETA_NODES, "solver": f"cvxpy {version('cvxpy')}, Clarabel "
+                      f"{version('clarabel')}"},
+        "margin": objective.margin,
+        "grid": {"kind": "Chebyshev-Gauss nodes", "shape": list(grid), "lowest": float(grid_min.min())},
+        "condition_number": condition,
+        "fit_error": {"definition": "max over the sphere (exact) of |tabulated - exact optimum| / the optimum's mean "
+                      "irradiance, worst channel", "points": int(hts.size), "seed": HELD_OUT_SEED,
+                      "kinds": kinds.format(held_out[1]), "worst": float(error[w]), "median": float(np.median(error)),
+                      "worst_at": [float(hts[w]), float(htu[w])]},
+        "nonnegativity": {"definition": "exact minimum over the sphere (sphere_minimum, the S-lemma dual) of the "
+                          "tabulated irradiance / its mean irradiance, lowest channel", "points": int(nts.size),
+                          "seed": HELD_OUT_SEED + 7, "kinds": kinds.format(NONNEG_POINTS[1]), "negative": negative,
+                          "lowest": float(lowest[k]), "lowest_at": [float(nts[k]), float(ntu[k])]},
+    }
+    return table, per_band, block

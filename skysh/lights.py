@@ -81,7 +81,7 @@ from skysh._checks import (
     number_text,
     short_repr,
 )
-from skysh.preetham import _luminance_scale
+from skysh.preetham import luminance_scale_unchecked
 from skysh.sunlight import SUN_AIR_MASS_COEFFICIENTS, SUN_AIR_MASS_RANGE
 
 __all__ = ["SUN_SH_CLAMP", "ALBEDO_RANGE", "check_albedo", "sun_trig_matrix", "ground_zonal", "LitPlan"]
@@ -133,18 +133,24 @@ def check_albedo(ground_albedo: Any) -> tuple[float, float, float] | None:
         three, or a value outside [0, 1].
     """
     low, high = ALBEDO_RANGE
-    if type(ground_albedo) is float or type(ground_albedo) is int:
+    kind = type(ground_albedo)
+    if kind is float or kind is int:  # the per-frame paths: Python numbers, no numpy
         value = float(ground_albedo)
         if not low <= value <= high:  # also False for NaN
             raise ValueError(f"ground_albedo must lie in [{low:g}, {high:g}], got {number_text(value)}")
         return None if value == 0.0 else (value, value, value)
-    kind = type(ground_albedo)
-    if (kind is tuple or kind is list) and len(ground_albedo) == 3:  # three Python floats: no numpy
+    if (kind is tuple or kind is list) and len(ground_albedo) == 3:  # three Python floats in range: no numpy
         r, g, b = ground_albedo
         if type(r) is float and type(g) is float and type(b) is float and low <= r <= high and low <= g <= high \
                 and low <= b <= high:
             return None if r == 0.0 and g == 0.0 and b == 0.0 else (r, g, b)
-    if (kind is tuple or kind is list) and any(isinstance(v, (bool, np.bool_)) for v in ground_albedo):
+    return _array_albedo(ground_albedo)
+
+
+def _array_albedo(ground_albedo: Any) -> tuple[float, float, float] | None:
+    """:func:`check_albedo` of anything but a Python number or three floats in range: through numpy."""
+    low, high = ALBEDO_RANGE
+    if type(ground_albedo) in (tuple, list) and any(isinstance(v, (bool, np.bool_)) for v in ground_albedo):
         raise ValueError(f"ground_albedo must be a real number or an RGB triple of numbers, got {short_repr(ground_albedo)}")
     albedo = as_float_array(ground_albedo, "ground_albedo")  # refuses bools, text, NaN, inf
     if albedo.shape not in ((), (3,)):
@@ -262,7 +268,7 @@ class LitPlan:
         self.rotation = (self.y_slice.stop + np.asarray(sky_plan.rot_index))[:, None].repeat(3, axis=1)
         self.zonal_rows = np.array([l * (l + 1) for l in range(bands)], dtype=np.intp)
         self.ground_rows = zonal[self.zonal_rows][:, None]
-        self.window_l = np.asarray(window)[sh._l_of_index(bands)][:, None]
+        self.window_l = np.asarray(window)[sh.band_of_index(bands)][:, None]
         self.rgb_from_xyz = np.eye(3) if rgb_from_xyz is None else np.array(rgb_from_xyz, dtype=np.float64)
         self.rgb_rows: tuple[tuple[float, ...], ...] = tuple(tuple(row) for row in self.rgb_from_xyz.tolist())
         for array in (self.table_x, self.angle_map, self.rotation, self.zonal_rows, self.ground_rows, self.window_l,
@@ -283,7 +289,7 @@ class LitPlan:
         depth, w = self.depth, self.width
         a = np.dot(packed[: self.nx], self.table_x)
         b = np.dot(packed[self.y_slice].reshape(3, depth + 1), a.reshape(depth + 1, w + 3))
-        lum = _luminance_scale(ts, t)
+        lum = luminance_scale_unchecked(ts, t)
         (c0, c1, c2, _, _, _), (_, _, _, lx, ly, lz) = b[:2, w - 3 :].tolist()  # the sky's c_10; the sun's ln XYZ
         if sun:  # Python floats: cheaper than numpy for three values; all over lum, as the sky's b
             inv = 1.0 / lum
@@ -334,7 +340,7 @@ class LitPlan:
         """(n, N * N, 3): the windowed delta of ``rgb`` (n, 3) lux towards (ts, phi) (n,), clamped as :meth:`fused`."""
         s = np.sin(ts)
         dirs = np.stack([s * np.cos(phi), s * np.sin(phi), np.cos(ts)], axis=-1)
-        y = sh._basis(dirs, self.bands) * self.window_l[:, 0]
+        y = sh.basis_unchecked(dirs, self.bands) * self.window_l[:, 0]
         return y[:, :, None] * np.maximum(rgb, SUN_SH_CLAMP)[:, None, :]
 
     def add_ground(self, coeffs: NDArray[np.float64], e_h: NDArray[np.float64],

@@ -10,6 +10,7 @@ condition number near 1e15; see the error report's stability section).
 -   :data:`SUN_ZENITH_DOMAIN`, :data:`TURBIDITY_DOMAIN`: the fitted domain.
 -   :func:`scale`: (sun zenith, turbidity) -> (x, y) in [-1, 1]^2.
 -   :func:`chebyshev`: T_0 .. T_d at x, by the three-term recurrence.
+-   :func:`scale_unchecked`, :func:`chebyshev_unchecked`: the same for per-frame paths that checked once.
 -   :func:`design`: the products T_i(x) T_j(y), i <= d_theta, j <= d_tau.
 -   :func:`term_index`: flat index of the term (i, j) of degrees (d_theta, d_tau).
 
@@ -33,7 +34,9 @@ __all__ = [
     "TURBIDITY_DOMAIN",
     "MAX_DEGREE",
     "scale",
+    "scale_unchecked",
     "chebyshev",
+    "chebyshev_unchecked",
     "design",
     "term_index",
     "n_terms",
@@ -85,11 +88,11 @@ def scale(sun_zenith: ArrayLike, turbidity: ArrayLike, log_turbidity: bool = Tru
     t = as_float_array(turbidity, "turbidity")
     if log_turbidity and t.size and t.min() <= 0.0:
         raise ValueError(f"turbidity must be > 0 (its log is taken), got {float(t.min())!r}")
-    return _scale(ts, t, log_turbidity)
+    return scale_unchecked(ts, t, log_turbidity)
 
 
-def _scale(ts: NDArray, t: NDArray, log_turbidity: bool = True) -> tuple[NDArray, NDArray]:
-    """:func:`scale` of checked float64 arrays."""
+def scale_unchecked(ts: NDArray, t: NDArray, log_turbidity: bool = True) -> tuple[NDArray, NDArray]:
+    """:func:`scale` without its checks: float64 arrays (``t > 0`` when ``log_turbidity``), a bool."""
     lo_s, hi_s = SUN_ZENITH_DOMAIN
     x = (2.0 * ts - (lo_s + hi_s)) / (hi_s - lo_s)
     if log_turbidity:
@@ -111,11 +114,11 @@ def chebyshev(x: ArrayLike, degree: int) -> NDArray[np.float64]:
     degree = check_count(degree, "degree", 0, MAX_DEGREE)
     x = as_float_array(x, "x")
     check_size(x.size * (degree + 1), "x", f"T_0 .. T_{degree} at {x.size:,} points")
-    return _chebyshev(x, degree)
+    return chebyshev_unchecked(x, degree)
 
 
-def _chebyshev(x: NDArray, degree: int) -> NDArray[np.float64]:
-    """:func:`chebyshev` of a checked float64 array."""
+def chebyshev_unchecked(x: NDArray, degree: int) -> NDArray[np.float64]:
+    """:func:`chebyshev` without its checks: a float64 array and an int ``degree`` in [0, :data:`MAX_DEGREE`]."""
     out = np.empty(x.shape + (degree + 1,))
     out[..., 0] = 1.0
     if degree >= 1:
@@ -123,6 +126,9 @@ def _chebyshev(x: NDArray, degree: int) -> NDArray[np.float64]:
     for k in range(2, degree + 1):
         out[..., k] = 2.0 * x * out[..., k - 1] - out[..., k - 2]
     return out
+
+
+# the names skysh/runtime.py still reads (issue 14: to go once it reads scale_unchecked and chebyshev_unchecked)
 
 
 def _degrees(degrees: Any, name: str = "degrees") -> tuple[int, int]:
@@ -181,6 +187,6 @@ def design(
         ) from None
     terms = (d_theta + 1) * (d_tau + 1)
     check_size(x.size * terms, "sun_zenith", f"{terms} terms at {x.size:,} points")
-    tx = _chebyshev(x, d_theta)
-    ty = _chebyshev(y, d_tau)
+    tx = chebyshev_unchecked(x, d_theta)
+    ty = chebyshev_unchecked(y, d_tau)
     return (tx[..., :, None] * ty[..., None, :]).reshape(x.shape + (terms,))

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Callable
 from functools import cache
 from types import ModuleType
 from typing import Any
@@ -76,7 +77,11 @@ __all__ = [
     "sky_quadrature_rule",
     "sky_sh",
     "sky_minimum",
+    "hemisphere_minimum",
     "luminance_scale",
+    "zenith_luminance_unchecked",
+    "luminance_scale_unchecked",
+    "import_colour",
 ]
 
 SUN_ZENITH_RANGE: tuple[float, float] = (0.0, math.pi / 2.0)
@@ -128,7 +133,7 @@ _COLOUR_MATPLOTLIB_WARNING: str = r'"Matplotlib" related API features are not av
 plots nothing, so the warning is noise to its users and is filtered around the import."""
 
 
-def _colour() -> ModuleType:
+def import_colour() -> ModuleType:
     """colour-science, imported on first use without its side effects on the user's session.
 
     Its "matplotlib not available" warning is filtered (skysh plots nothing), and numpy's
@@ -204,24 +209,28 @@ def _perez(ct: NDArray, gamma: NDArray, cg: NDArray, coefficients: NDArray) -> N
 def zenith_luminance(sun_zenith: ArrayLike, turbidity: ArrayLike) -> NDArray[np.float64]:
     """Zenith luminance Y_z in cd/m^2 (Preetham's kcd/m^2 times 1000)."""
     ts, t = _check_sun(sun_zenith, turbidity)
-    return _zenith_luminance(ts, t, np)
+    return zenith_luminance_unchecked(ts, t, np)
 
 
-def _zenith_luminance(ts: Any, t: Any, ops: Any = math) -> Any:
-    """Y_z in cd/m^2 with ``ops`` = math (floats, the runtime's fast path) or numpy (arrays); unchecked."""
+def zenith_luminance_unchecked(ts: Any, t: Any, ops: Any = math) -> Any:
+    """:func:`zenith_luminance` without its checks, for per-frame paths that checked once: floats with
+    ``ops = math`` or arrays with ``ops = numpy`` (any namespace with ``tan``), in the model's domain."""
     chi = (4.0 / 9.0 - t / 120.0) * (math.pi - 2.0 * ts)
     return 1000.0 * ((4.0453 * t - 4.9710) * ops.tan(chi) - 0.2155 * t + 2.4192)
 
 
-def _luminance_scale(ts: Any, t: Any, ops: Any = math) -> Any:
-    """Y_z / F_Y(0, ts) with ``ops`` = math or numpy; unchecked (see :func:`luminance_scale`)."""
+def luminance_scale_unchecked(ts: Any, t: Any, ops: Any = math) -> Any:
+    """:func:`luminance_scale` without its checks: floats with ``ops = math`` or arrays with
+    ``ops = numpy`` (any namespace with ``cos``, ``exp`` and ``tan``), in the model's domain."""
     slope, intercept = _PEREZ_Y_SLOPE, _PEREZ_Y_INTERCEPT
     cos_ts = ops.cos(ts)
     f_zenith = (1.0 + (slope[0] * t + intercept[0]) * ops.exp(slope[1] * t + intercept[1])) * (
         1.0 + (slope[2] * t + intercept[2]) * ops.exp((slope[3] * t + intercept[3]) * ts)
         + (slope[4] * t + intercept[4]) * cos_ts * cos_ts
     )
-    return _zenith_luminance(ts, t, ops) / f_zenith
+    return zenith_luminance_unchecked(ts, t, ops) / f_zenith
+
+
 
 
 def zenith_chromaticity(sun_zenith: ArrayLike, turbidity: ArrayLike) -> NDArray[np.float64]:
@@ -252,7 +261,7 @@ def luminance_scale(sun_zenith: ArrayLike, turbidity: ArrayLike) -> NDArray[np.f
     one tan and two exp per evaluation.
     """
     ts, t = _check_sun(sun_zenith, turbidity)
-    return _luminance_scale(ts, t, np)
+    return luminance_scale_unchecked(ts, t, np)
 
 
 def _sun_dir(sun_zenith: float, sun_azimuth: float) -> NDArray[np.float64]:
@@ -311,7 +320,7 @@ def luminance(dirs: ArrayLike, sun_zenith: float, sun_azimuth: float, turbidity:
 
 def colourspace_names() -> tuple[str, ...]:
     """The names :func:`rgb_from_xyz_matrix` accepts (colour-science's ``RGB_COLOURSPACES`` keys), sorted."""
-    return tuple(sorted(_colour().RGB_COLOURSPACES.keys(), key=str.lower))
+    return tuple(sorted(import_colour().RGB_COLOURSPACES.keys(), key=str.lower))
 
 
 def rgb_from_xyz_matrix(colourspace: str = "sRGB") -> NDArray[np.float64]:
@@ -336,7 +345,7 @@ def rgb_from_xyz_matrix(colourspace: str = "sRGB") -> NDArray[np.float64]:
 
 @cache
 def _rgb_from_xyz_matrix(colourspace: str) -> NDArray[np.float64]:
-    colour = _colour()
+    colour = import_colour()
     if colourspace not in colour.RGB_COLOURSPACES:
         raise ValueError(
             f"colourspace must be a colour-science RGB colourspace name, got {colourspace!r}; valid names: "
@@ -370,7 +379,7 @@ def radiance(
     """
     matrix = rgb_from_xyz_matrix(colourspace)
     values = xyY(dirs, sun_zenith, sun_azimuth, turbidity)
-    xyz = _colour().xyY_to_XYZ(values)
+    xyz = import_colour().xyY_to_XYZ(values)
     return xyz @ matrix.T
 
 
@@ -483,7 +492,7 @@ def sky_sh(
         check_size(4 * n_theta * n_theta * bands * bands, "n" if n is not None else "bands", "the basis at the nodes")
         dirs, weights = sky_quadrature_rule(ts, n_theta)
         values = radiance(dirs, ts, 0.0, t, colourspace)
-        coeffs = (sh._basis(dirs, bands).T * weights) @ values  # .T is the contiguous (K, M) buffer
+        coeffs = (sh.basis_unchecked(dirs, bands).T * weights) @ values  # .T is the contiguous (K, M) buffer
         coeffs[[sh.index(*sh.lm(i)) for i in range(bands * bands) if sh.lm(i)[1] < 0]] = 0.0
     else:
         coeffs = sh.project(
@@ -497,7 +506,7 @@ MAX_THETA_NODES: int = sh.MAX_GAUSS_NODES // 2
 at most :data:`skysh.sh.MAX_GAUSS_NODES`): 4 * 512**2, about a million directions."""
 
 _MIN_GRID_STEP: float = math.radians(2.0)
-"""Spacing of the coarse grid that seeds :func:`sky_minimum`, radians."""
+"""Spacing of the coarse grid that seeds :func:`hemisphere_minimum`, radians."""
 
 _MIN_REFINE: tuple[int, ...] = (20, 20)
 """Each refinement searches a (2k+1)^2 grid spanning +-1 previous step around the best node."""
@@ -522,41 +531,66 @@ def sky_minimum(sun_zenith: float, turbidity: float, colourspace: str = "sRGB") 
 
     Notes
     -----
-    A 2-degree grid over zenith [0, 90] x azimuth [0, 180] degrees (the sky is
-    symmetric about its sun's vertical plane), then two local grids of 41 x 41
-    nodes around the best node, each 20 times finer (final spacing 0.005
-    degrees; the sky is smooth at its minimum, so the remaining error is
-    second order in that spacing). Deterministic and vectorised. An RGB channel can be
-    negative: near sunset at low turbidity the sky's chromaticity leaves the
-    sRGB gamut (blue about -700 cd/m^2 at sun_zenith = pi/2, turbidity 2.5).
+    The search of :func:`hemisphere_minimum`. An RGB channel can be negative: near
+    sunset at low turbidity the sky's chromaticity leaves the sRGB gamut (blue about
+    -700 cd/m^2 at sun_zenith = pi/2, turbidity 2.5).
     """
     ts = check_scalar(sun_zenith, "sun_zenith", *SUN_ZENITH_RANGE, unit="rad")
     t = check_scalar(turbidity, "turbidity", *TURBIDITY_RANGE)
     rgb_from_xyz_matrix(colourspace)
 
-    def values(theta: NDArray, phi: NDArray) -> NDArray:
-        st = np.sin(theta)
-        d = np.stack([st * np.cos(phi), st * np.sin(phi), np.cos(theta)], axis=-1)
+    def values(d: NDArray) -> NDArray:
         d /= np.linalg.norm(d, axis=-1, keepdims=True)
-        rgb = radiance(d, ts, 0.0, t, colourspace)
-        return np.concatenate([rgb, luminance(d, ts, 0.0, t)[..., None]], axis=-1)
+        return np.concatenate([radiance(d, ts, 0.0, t, colourspace), luminance(d, ts, 0.0, t)[..., None]], axis=-1)
+
+    return hemisphere_minimum(values)
+
+
+def hemisphere_minimum(values: Callable[[NDArray], NDArray]) -> NDArray[np.float64]:
+    """
+    Minimum of each of Q quantities of a sky over the upper hemisphere, its sun at azimuth 0.
+
+    Parameters
+    ----------
+    values
+        Takes unit vectors (..., 3) with azimuth in [0, pi] and returns (..., Q): the
+        quantities there (the sky is symmetric about its sun's vertical plane).
+
+    Returns
+    -------
+    ndarray
+        (Q,): each quantity's minimum, searched on its own.
+
+    Notes
+    -----
+    A 2-degree grid over zenith [0, 90] x azimuth [0, 180] degrees, then two local grids
+    of 41 x 41 nodes around each quantity's best node, each 20 times finer (final
+    spacing 0.005 degrees; a smooth minimum then leaves an error second order in it).
+    Deterministic and vectorised. Used by :func:`sky_minimum` and
+    :func:`skysh.hosek.sky_minimum`.
+    """
+
+    def at(theta: NDArray, phi: NDArray) -> NDArray:
+        st = np.sin(theta)
+        return values(np.stack([st * np.cos(phi), st * np.sin(phi), np.cos(theta)], axis=-1))
 
     step = _MIN_GRID_STEP
     theta = np.linspace(0.0, math.pi / 2.0, round(math.pi / 2.0 / step) + 1)
     phi = np.linspace(0.0, math.pi, round(math.pi / step) + 1)
     th, ph = (a.ravel() for a in np.meshgrid(theta, phi, indexing="ij"))
-    grid = values(th, ph)  # (M, 4)
+    grid = at(th, ph)  # (M, Q)
+    q = np.arange(grid.shape[-1])
     best = np.argmin(grid, axis=0)
-    centre = np.stack([th[best], ph[best]], axis=-1)  # (4, 2)
-    out = grid[best, np.arange(4)]
+    centre = np.stack([th[best], ph[best]], axis=-1)  # (Q, 2)
+    out = grid[best, q]
     for k in _MIN_REFINE:
         offsets = np.linspace(-step, step, 2 * k + 1)
         step = step / k
         oth, oph = (a.ravel() for a in np.meshgrid(offsets, offsets, indexing="ij"))
-        cth = np.clip(centre[:, 0, None] + oth, 0.0, math.pi / 2.0)  # (4, M)
+        cth = np.clip(centre[:, 0, None] + oth, 0.0, math.pi / 2.0)  # (Q, M)
         cph = np.clip(centre[:, 1, None] + oph, 0.0, math.pi)
-        local = values(cth, cph)[np.arange(4), :, np.arange(4)]  # quantity k on its own grid
+        local = at(cth, cph)[q, :, q]  # quantity k on its own grid
         best = np.argmin(local, axis=1)
-        centre = np.stack([cth[np.arange(4), best], cph[np.arange(4), best]], axis=-1)
-        out = np.minimum(out, local[np.arange(4), best])
+        centre = np.stack([cth[q, best], cph[q, best]], axis=-1)
+        out = np.minimum(out, local[q, best])
     return out

@@ -313,7 +313,18 @@ def compress(
     c = _check_coeffs(coeffs)
     bits = _check_bits(bits)
     scale = bounds(bound, bool(irradiance))
-    v = _ratios(c, scale)
+    v = _clamped(_ratios(c, scale))
+    if sqrt:
+        v = np.sign(v) * np.sqrt(np.abs(v))
+    bv = float((1 << (bits - 1)) - 1)
+    codes = np.floor((bv + 0.5) + v * bv).astype(np.uint64)  # 0 .. 2 bv, round to nearest (Listing 1)
+    words = _pack(np.moveaxis(codes, -2, -1), bits)  # (..., C, 8) -> (..., C, W)
+    return c[..., 0, :].copy(), words
+
+
+def _clamped(v: NDArray) -> NDArray:
+    """The ratios clipped to [-1, 1], with one :class:`QuantizationClampWarning` (to the caller of
+    :func:`compress`) when any lies beyond :data:`CLAMP_TOLERANCE`."""
     over = ~(np.abs(v) <= 1.0 + CLAMP_TOLERANCE)
     if over.any():
         worst = float(np.max(np.abs(v[over])))
@@ -323,15 +334,9 @@ def compress(
                 f"(worst |c_k / (c_0 bound)| = {worst:.6g}); clamped to [-1, 1]. "
                 "No non-negative function has such SH."
             ),
-            stacklevel=2,
+            stacklevel=3,
         )
-    v = np.clip(v, -1.0, 1.0)
-    if sqrt:
-        v = np.sign(v) * np.sqrt(np.abs(v))
-    bv = float((1 << (bits - 1)) - 1)
-    codes = np.floor((bv + 0.5) + v * bv).astype(np.uint64)  # 0 .. 2 bv, round to nearest (Listing 1)
-    words = _pack(np.moveaxis(codes, -2, -1), bits)  # (..., C, 8) -> (..., C, W)
-    return c[..., 0, :].copy(), words
+    return np.clip(v, -1.0, 1.0)
 
 
 def _pack(codes: NDArray[np.uint64], bits: int) -> NDArray[np.uint32]:

@@ -11,7 +11,10 @@ The per-frame runtime (Habel 2008, sections 3.1-3.3)
     sun (:mod:`skysh.lights`: the order of the parts and the fused scalar
     path); :meth:`SkySH.sun_light` gives the sun as a directional light
     (direction and RGB illuminance, lux) from the file's sun table
-    (:class:`skysh.sunlight.SunLight`).
+    (:class:`skysh.sunlight.SunLight`). Irradiance at 3 bands comes by default
+    from the file's certified non-negative irradiance table instead
+    (``docs/irradiance.md``): the same evaluation and rotation, no filter, no
+    deringing search; ``irradiance_table=False`` gives the pipeline above.
 
 Everything static is prepared in :meth:`SkySH.__init__`: for every band count
 N and Gibbs setting, one table whose zonal rows are pre-scaled by
@@ -58,18 +61,20 @@ from skysh._checks import (
     real_scalar,
     short_repr,
 )
-from skysh.preetham import _luminance_scale
+from skysh.preetham import luminance_scale_unchecked as _luminance_scale
 from skysh.sunlight import SunLight
 
-__all__ = ["SkySH", "gibbs_factors"]
+__all__ = ["SkySH", "gibbs_factors", "X_SCALE", "X_SHIFT", "Y_SCALE", "Y_SHIFT"]
 
-_X_SCALE: float = 2.0 / (poly.SUN_ZENITH_DOMAIN[1] - poly.SUN_ZENITH_DOMAIN[0])
-_X_SHIFT: float = (poly.SUN_ZENITH_DOMAIN[0] + poly.SUN_ZENITH_DOMAIN[1]) / (
+X_SCALE: float = 2.0 / (poly.SUN_ZENITH_DOMAIN[1] - poly.SUN_ZENITH_DOMAIN[0])
+X_SHIFT: float = (poly.SUN_ZENITH_DOMAIN[0] + poly.SUN_ZENITH_DOMAIN[1]) / (
     poly.SUN_ZENITH_DOMAIN[1] - poly.SUN_ZENITH_DOMAIN[0]
 )
+"""X_SCALE, X_SHIFT: sun zenith (rad) -> Chebyshev variable x = zenith X_SCALE - X_SHIFT in [-1, 1]."""
 _LOG_T: tuple[float, float] = (math.log(poly.TURBIDITY_DOMAIN[0]), math.log(poly.TURBIDITY_DOMAIN[1]))
-_Y_SCALE: float = 2.0 / (_LOG_T[1] - _LOG_T[0])
-_Y_SHIFT: float = (_LOG_T[0] + _LOG_T[1]) / (_LOG_T[1] - _LOG_T[0])
+Y_SCALE: float = 2.0 / (_LOG_T[1] - _LOG_T[0])
+Y_SHIFT: float = (_LOG_T[0] + _LOG_T[1]) / (_LOG_T[1] - _LOG_T[0])
+"""Y_SCALE, Y_SHIFT: turbidity -> Chebyshev variable y = ln(T) Y_SCALE - Y_SHIFT in [-1, 1]."""
 _ZMIN, _ZMAX = poly.SUN_ZENITH_DOMAIN
 _TWO_PI: float = 2.0 * math.pi
 _TMIN, _TMAX = poly.TURBIDITY_DOMAIN
@@ -107,31 +112,43 @@ def _rotation_factors(phi: NDArray[np.float64], bands: int) -> NDArray[np.float6
     return rot.T
 
 
+def _terms(table: NDArray[np.float64], top: tuple[int, int], degrees: tuple[int, int]) -> NDArray[np.float64]:
+    """(T, rows, 3): the terms of ``degrees`` (:func:`skysh.poly.term_index` order) of a table laid out for ``top``,
+    zero above its own degrees (a copy)."""
+    i, j = np.divmod(np.arange((degrees[0] + 1) * (degrees[1] + 1)), degrees[1] + 1)
+    inside = (i <= top[0]) & (j <= top[1])
+    out = np.zeros((i.size,) + table.shape[1:])
+    out[inside] = table[i[inside] * (top[1] + 1) + j[inside]]
+    return out
+
+
 class _Plan:
-    """Precomputed arithmetic of one (bands, gibbs) setting."""
+    """Precomputed arithmetic of one (bands, gibbs) setting (or of the irradiance table)."""
 
     __slots__ = (
         "bands", "degrees", "half_table", "table_flat", "rot_index", "batch_rot_index", "lobe",
         "split", "angle_map", "gather", "rotation",
     )
 
-    def __init__(self, sky_table: coefficient_file.SkyTable, bands: int, gibbs: bool, c10: bool = False) -> None:
-        """``c10``: append the *unfiltered* (1, 0) row to the tables (for the ground's E_h; any ``bands``)."""
+    def __init__(self, sky_table: coefficient_file.SkyTable, bands: int, gibbs: bool, c10: bool = False,
+                 rows_from: coefficient_file.NamedTable | None = None, lobe: bool = False) -> None:
+        """``c10``: append the sky's *unfiltered* (1, 0) row (for the ground's E_h; any ``bands``).
+        ``rows_from``: the m >= 0 rows from this table (the file's irradiance table, 3 groups) instead of
+        the sky's. ``lobe``: fold the clamped-cosine factors A_l into them (irradiance out)."""
         self.bands = bands
-        d = sky_table.degrees[:bands].max(axis=0)
+        own = sky_table.degrees[:bands] if rows_from is None else rows_from.degrees
+        d = np.max(np.concatenate([own, sky_table.degrees[1:2]]) if c10 and rows_from is not None else own, axis=0)
         self.degrees = (int(d[0]), int(d[1]))
         k = bands * bands
         k_half = bands * (bands + 1) // 2
         lms = [sh.lm(i) for i in range(k)]
-        terms = [
-            poly.term_index(i, j, sky_table.max_degrees)
-            for i in range(self.degrees[0] + 1)
-            for j in range(self.degrees[1] + 1)
-        ]
-        half = sky_table.table[np.ix_(np.array(terms, dtype=np.intp), np.arange(k_half))].copy()  # (T, K_half, 3), m >= 0 rows
-        if c10:  # (1, 0) is row 1 of the file's layout (a 1-band file has none: zeros, the ground is refused)
-            extra = sky_table.table[terms, 1:2] if sky_table.bands > 1 else np.zeros((len(terms), 1, 3))
-            half = np.concatenate([half, extra], axis=1)  # (T, K_half + 1, 3)
+        rows = sky_table if rows_from is None else rows_from
+        half = _terms(rows.table, rows.max_degrees, self.degrees)[:, :k_half]  # (T, K_half, 3), m >= 0 rows
+        if lobe:
+            half *= sh.cosine_lobe(bands)[[l for l, _ in coefficient_file.zonal_half_layout(bands)]][:, None]
+        if c10:  # (1, 0) is row 1 of the sky's layout (a 1-band file has none: zeros, the ground is refused)
+            extra = _terms(sky_table.table, sky_table.max_degrees, self.degrees)[:, 1:2]
+            half = np.concatenate([half, extra if sky_table.bands > 1 else np.zeros((half.shape[0], 1, 3))], axis=1)
         if gibbs:  # Habel eq. (5) folded into the zonal rows (the seed's own optimisation)
             factors = gibbs_factors(bands)
             for row, (l, m) in enumerate(coefficient_file.zonal_half_layout(bands)):
@@ -147,7 +164,7 @@ class _Plan:
         self.rot_index = np.where(orders < 0, bands + np.abs(orders), np.abs(orders)).astype(np.intp)
         # Batch path: the full table (m < 0 columns repeat their m > 0 partners; the c_10 row last, unrotated).
         columns = list(source) + ([k_half] if c10 else [])
-        self.table_flat = np.ascontiguousarray(half[:, columns].reshape(len(terms), -1))
+        self.table_flat = np.ascontiguousarray(half[:, columns].reshape(half.shape[0], -1))
         self.batch_rot_index = np.concatenate([self.rot_index, np.zeros(len(columns) - len(source), np.intp)])
         self.lobe = sh.cosine_lobe(bands)[np.array([l for l, _ in lms])][:, None]
         # Scalar path: packed = cos(angle_map @ (acos x, acos y, phi, 1)) holds T_0..T_dx(x),
@@ -196,14 +213,30 @@ class SkySH:
             (n, g): _Plan(sky_table, n, g) for n in range(1, self.bands + 1) for g in (False, True)
         }
         self._colour_matrices: dict[str, NDArray[np.float64]] = {}
+        self._mixing: dict[str, bool] = {}  # colourspace -> its conversion matrix has a negative entry
         self._sun: SunLight | None = SunLight(sky_table) if "sun" in sky_table.tables else None
-        self._lit_plans: dict[tuple[int, bool], lights.LitPlan] = {}  # built on first use of the sun or the ground
+        self._lit_plans: dict[tuple[int, bool, bool], lights.LitPlan] = {}  # built on first use of the sun or ground
+        irradiance = sky_table.tables.get("irradiance") if sky_table.bands >= 3 else None
+        # The certified irradiance table (docs/irradiance.md): radiance-equivalent (False), irradiance (True).
+        self._table_plans: dict[bool, _Plan] | None = None if irradiance is None else {
+            lobe: _Plan(sky_table, 3, False, rows_from=irradiance, lobe=lobe) for lobe in (False, True)}
 
     @classmethod
     def load(cls, path: str | Path | None = None) -> SkySH:
         """Load the shipped coefficient file (or ``path``), checked (see :func:`skysh.coefficient_file.read`)."""
         resolved = coefficient_file.default_path() if path is None else Path(path)
         return cls(coefficient_file.read(resolved), resolved)
+
+    @property
+    def has_irradiance_table(self) -> bool:
+        """Whether ``coefficients(..., irradiance_table=True)`` is available (the file's certified table, 3+ bands)."""
+        return self._table_plans is not None
+
+    def plan(self, bands: int, gibbs: bool = True) -> Any:
+        """The precomputed arithmetic of one (``bands``, ``gibbs``) setting of the sky table (its
+        half table, gather and rotation indices, degrees, lobe), read-only: for evaluators outside
+        Python that must reproduce :meth:`coefficients` (``benchmarks/bench_compiled.py``)."""
+        return self._plans[(check_bands(bands, high=self.bands), check_flag(gibbs, "gibbs"))]
 
     def __repr__(self) -> str:
         return f"SkySH(bands={self.bands}, degrees={self.table.max_degrees}, colourspace={self.colourspace!r})"
@@ -212,7 +245,7 @@ class SkySH:
     def coefficients(
         self, sun_zenith: ArrayLike, turbidity: ArrayLike, sun_azimuth: ArrayLike = 0.0, bands: int = 3,
         gibbs: bool | None = None, dering: bool | None = None, irradiance: bool = False, colourspace: str | None = None,
-        sun: bool = False, ground_albedo: ArrayLike = 0.0,
+        sun: bool = False, ground_albedo: ArrayLike = 0.0, irradiance_table: bool | None = None,
     ) -> NDArray[np.float64]:
         """
         SH coefficients of the sky (and its sun and ground) for one frame (or a batch).
@@ -220,52 +253,50 @@ class SkySH:
         Parameters
         ----------
         sun_zenith, turbidity, sun_azimuth
-            Radians in [0, pi/2] (zenith to horizon); [2.5, 6]; radians, any finite
-            value, from +X towards +Y. The fitted domain.
-        bands
-            SH bands N in [1, file bands] (7 shipped); 3 suffice for diffuse lighting.
+            Radians in [0, pi/2] (zenith to horizon); [2.5, 6]; radians, any finite value, from
+            +X towards +Y. The fitted domain. ``bands``: N in [1, file bands] (7 shipped).
         gibbs
-            The zonal sinc filter of Habel eq. (5), N = ``bands``, on the sky and
-            the ground (never the sun). Default (None): on for radiance (it halves
-            the ringing), off for irradiance (it blurs: ``python
-            tools/error_report.py --sections 9``).
+            The zonal sinc filter of Habel eq. (5), N = ``bands``, on the sky and the ground
+            (never the sun). Default (None): on for radiance (it halves the ringing), off for
+            irradiance (it blurs: ``python tools/error_report.py --sections 9``).
         dering
-            Window the sky so its irradiance is non-negative (Sloan 2017,
-            :func:`skysh.dering.dering`; one window for all channels), after the
-            filter and the rotation, before the sun and the ground are added (each
-            non-negative by construction). Default (None): on for irradiance only.
+            Window the sky so its irradiance is non-negative (Sloan 2017, :func:`skysh.dering.dering`;
+            one window for all channels), after the filter and the rotation, before the sun and
+            the ground (each non-negative by construction). Default (None): on for irradiance only.
         irradiance
-            Return irradiance E (clamped-cosine convolution, cd/m^2 x sr: lux for
-            the luminance); engines wanting E / pi: :mod:`skysh.engines`.
+            Return irradiance E (clamped-cosine convolution, cd/m^2 x sr: lux for the luminance);
+            engines wanting E / pi: :mod:`skysh.engines`.
         colourspace
             colour-science RGB colourspace name; default the file's (linear sRGB).
-        sun
-            Add the sun's disk (:meth:`sun_light`), a delta windowed by :func:`skysh.solar.sun_window`.
-        ground_albedo
-            A number or an RGB triple (output colourspace) in [0, 1]: a Lambertian
-            ground below the horizon, radiance albedo x E_h / pi with E_h the exact
-            irradiance of the horizontal ground by the sky (and the sun when
-            ``sun``). Default 0: black. Order and derivation: :mod:`skysh.lights`.
+        sun, ground_albedo
+            Add the sun's disk (:meth:`sun_light`), a delta windowed by :func:`skysh.solar.sun_window`;
+            a Lambertian ground below the horizon of albedo a number or an RGB triple (output
+            colourspace) in [0, 1], radiance albedo x E_h / pi with E_h the exact irradiance of the
+            horizontal ground by the sky (and the sun). Default 0: black. Order: :mod:`skysh.lights`.
+        irradiance_table
+            The sky from the file's certified 3-band irradiance table (``docs/irradiance.md``: the
+            irradiance closest to the truth subject to being non-negative everywhere), evaluated
+            as the sky (eqs. 1, 4), no filter, no deringing search. None: by intent, the table for
+            ``irradiance=True``, ``bands=3``, ``gibbs`` not True, ``dering`` not False. False: the
+            old pipeline. True: the table (with ``irradiance=False``, its radiance-equivalent
+            E_lm / A_l, for engines). With it ``dering`` acts only after a conversion to a
+            ``colourspace`` whose matrix has a negative entry (a no-op where non-negative).
 
-        Returns
-        -------
-        ndarray
-            (N * N, 3), or (..., N * N, 3) for array parameters (broadcast; empty:
-            (0, N * N, 3); at most ``skysh._checks.MAX_ARRAY_ELEMENTS`` values in
-            its largest array); radiance in cd/m^2 (R = G = B = Y for the
-            colourspace's white), linear RGB.
+        Returns (N * N, 3), or (..., N * N, 3) for array parameters (broadcast; empty: (0, N * N, 3);
+        at most ``skysh._checks.MAX_ARRAY_ELEMENTS`` values in its largest array); radiance in
+        cd/m^2 (R = G = B = Y for the colourspace's white), linear RGB.
 
-        Raises
-        ------
-        ValueError
-            A parameter outside its range (named, with the range), not finite, not broadcasting,
-            too large, or an unknown colourspace; ``sun=True`` without the file's sun table.
-        TypeError
-            ``gibbs``, ``dering``, ``irradiance`` or ``sun`` not a bool (None: by intent).
+        Raises ValueError for a parameter outside its range (named, with the range), not finite, not
+        broadcasting, too large, or an unknown colourspace; ``sun=True`` without the file's sun table;
+        ``irradiance_table=True`` without the table, with ``bands`` other than 3 or ``gibbs=True``.
+        TypeError for ``gibbs``, ``dering``, ``irradiance``, ``sun`` or ``irradiance_table`` not a bool.
         """
         irradiance = check_flag(irradiance, "irradiance")
-        gibbs = not irradiance if gibbs is None else check_flag(gibbs, "gibbs")
-        dering = irradiance if dering is None else check_flag(dering, "dering")
+        gibbs = gibbs if gibbs is None else check_flag(gibbs, "gibbs")
+        dering = dering if dering is None else check_flag(dering, "dering")
+        table = self._use_table(irradiance_table, irradiance, bands, gibbs, dering)
+        gibbs = not (irradiance or table) if gibbs is None else gibbs
+        dering = irradiance if dering is None else dering
         sun = sun if sun is False else check_flag(sun, "sun")
         albedo = None if type(ground_albedo) is float and ground_albedo == 0.0 else lights.check_albedo(ground_albedo)
         if colourspace is not None and not isinstance(colourspace, str):  # before any work, naming it
@@ -274,12 +305,15 @@ class SkySH:
         scalar = ts is not None and t is not None and phi is not None
         if sun or albedo is not None:
             frame = (ts, t, phi) if scalar else (sun_zenith, turbidity, sun_azimuth)
-            out = self._lit(frame, scalar, bands, gibbs, dering, colourspace, sun, albedo)
+            out = self._lit(frame, scalar, bands, gibbs, dering, colourspace, sun, albedo, table)
             return out * self._plans[(math.isqrt(out.shape[-2]), True)].lobe if irradiance else out
+        plan = self._table_plans[irradiance] if table else None  # type: ignore[index]
         if scalar:
-            out = self._one(ts, t, phi, bands, gibbs)  # type: ignore[arg-type]
+            out = self._one(ts, t, phi, bands, gibbs, plan)  # type: ignore[arg-type]
         else:
-            out = self._batch(sun_zenith, turbidity, sun_azimuth, bands, gibbs)
+            out = self._batch(sun_zenith, turbidity, sun_azimuth, bands, gibbs, plan)
+        if table:  # never negative (the certificate); a conversion mixing signs is deringed after it
+            return self._table_colour(out, colourspace, dering, irradiance)
         if dering:
             out = _dering(out)
         if irradiance:
@@ -288,10 +322,36 @@ class SkySH:
             out = out @ self._colour_matrix(colourspace).T
         return out
 
-    def _one(self, ts: float, t: float, phi: float, bands: Any, gibbs: bool) -> NDArray[np.float64]:
-        """Scalar fast path: floats only, arithmetic on precomputed tables."""
+    def _table_colour(self, out: NDArray, colourspace: str | None, dering: bool, irradiance: bool) -> NDArray:
+        """The table's result in ``colourspace``, deringed after a conversion whose matrix mixes signs (``dering``)."""
+        if colourspace is None or colourspace == self.colourspace:
+            return out
+        out = out @ self._colour_matrix(colourspace).T
+        return _dering(out, "radiance" if irradiance else "irradiance") if dering and self._mixing[colourspace] else out
+
+    def _use_table(self, choice: Any, irradiance: bool, bands: Any, gibbs: bool | None, dering: bool | None) -> bool:
+        """Whether :meth:`coefficients` takes the sky from the irradiance table (its ``irradiance_table`` rule)."""
+        if choice is None:
+            if not irradiance or self._table_plans is None or gibbs is True or dering is False:
+                return False
+            return (bands if type(bands) is int else check_bands(bands, high=self.bands)) == 3
+        if not check_flag(choice, "irradiance_table"):
+            return False
+        if self._table_plans is None:
+            raise ValueError("irradiance_table=True needs the coefficient file's irradiance table (format 4, 3 bands or "
+                             "more); this SkyTable has none")
+        if check_bands(bands, high=self.bands) != 3:
+            raise ValueError(f"irradiance_table=True needs bands=3 (the table's), got bands={bands!r}")
+        if gibbs is True:
+            raise ValueError("irradiance_table=True does not go with gibbs=True: the table is the irradiance's own "
+                             "optimum, not a filtered sky (pass gibbs=None or False, or irradiance_table=False)")
+        return True
+
+    def _one(self, ts: float, t: float, phi: float, bands: Any, gibbs: bool, plan: _Plan | None = None) -> NDArray:
+        """Scalar fast path: floats only, arithmetic on precomputed tables (``plan``: default the sky's)."""
         phi = _check_frame(ts, t, phi)
-        plan = self._plans.get((bands, gibbs)) if type(bands) is int and type(gibbs) is bool else None
+        if plan is None and type(bands) is int and type(gibbs) is bool:
+            plan = self._plans.get((bands, gibbs))
         if plan is None:
             check_bands(bands, high=self.bands)
             plan = self._plans[(int(bands), bool(gibbs))]
@@ -299,8 +359,8 @@ class SkySH:
         # Every per-call factor in one vectorised cos: the Chebyshev terms T_k(x) =
         # cos(k acos x) of both variables and the rotation factors cos(m phi) and
         # sin(m phi) = cos(m phi - pi/2). Error <= k^2 eps, far below the fit's.
-        x = ts * _X_SCALE - _X_SHIFT
-        y = math.log(t) * _Y_SCALE - _Y_SHIFT
+        x = ts * X_SCALE - X_SHIFT
+        y = math.log(t) * Y_SCALE - Y_SHIFT
         # Clamp what rounding may push past +-1 at the domain's edges (x >= -1 holds exactly).
         angles = (math.acos(x if x < 1.0 else 1.0), math.acos(y if -1.0 < y < 1.0 else math.copysign(1.0, y)), phi, 1.0)
         packed = np.cos(np.dot(plan.angle_map, np.array(angles)))
@@ -311,11 +371,12 @@ class SkySH:
         out *= _luminance_scale(ts, t)
         return out
 
-    def _batch(self, sun_zenith: ArrayLike, turbidity: ArrayLike, sun_azimuth: ArrayLike, bands: Any, gibbs: bool) -> NDArray:
-        """Array path: one design matrix, one matrix product, vectorised rotation."""
+    def _batch(self, sun_zenith: ArrayLike, turbidity: ArrayLike, sun_azimuth: ArrayLike, bands: Any, gibbs: bool,
+               plan: _Plan | None = None) -> NDArray:
+        """Array path: one design matrix, one matrix product, vectorised rotation (``plan``: default the sky's)."""
         ts, t, phi, shape = self._frames(sun_zenith, turbidity, sun_azimuth)
-        bands = check_bands(bands, high=self.bands)
-        plan = self._plans[(bands, bool(gibbs))]
+        if plan is None:
+            plan = self._plans[(check_bands(bands, high=self.bands), bool(gibbs))]
         return self._batch_sky(ts, t, phi, shape, plan)
 
     def _frames(self, sun_zenith: ArrayLike, turbidity: ArrayLike, sun_azimuth: ArrayLike) -> tuple:
@@ -342,9 +403,9 @@ class SkySH:
         if 0 in shape:
             return np.zeros(shape + (rows, 3))
         ts, t, phi = (np.broadcast_to(a, shape).ravel() for a in (ts, t, phi))
-        x, y = poly._scale(ts, t)
-        tx = poly._chebyshev(x, plan.degrees[0])
-        ty = poly._chebyshev(y, plan.degrees[1]) * _luminance_scale(ts, t, np)[:, None]
+        x, y = poly.scale_unchecked(ts, t)
+        tx = poly.chebyshev_unchecked(x, plan.degrees[0])
+        ty = poly.chebyshev_unchecked(y, plan.degrees[1]) * _luminance_scale(ts, t, np)[:, None]
         p = (tx[:, :, None] * ty[:, None, :]).reshape(ts.shape[0], -1)  # (n, T) design
         out = (p @ plan.table_flat).reshape(-1, rows, 3)  # the one matrix product
         out *= np.take(_rotation_factors(phi, bands), plan.batch_rot_index, axis=1)[:, :, None]
@@ -360,49 +421,54 @@ class SkySH:
             source = rgb_from_xyz_matrix(self.colourspace)
             matrix = rgb_from_xyz_matrix(colourspace) @ np.linalg.inv(source)
             matrix.flags.writeable = False
+            self._mixing[colourspace] = bool(np.any(matrix < 0.0))
             self._colour_matrices[colourspace] = matrix
         return matrix
 
     # ------------------------------------------------------------------ #
     # The sun and the ground (skysh.lights)
     # ------------------------------------------------------------------ #
-    def _lit_plan(self, bands: Any, gibbs: bool) -> lights.LitPlan:
-        plan = self._lit_plans.get((bands, gibbs)) if type(bands) is int else None
+    def _lit_plan(self, bands: Any, gibbs: bool, table: bool = False) -> lights.LitPlan:
+        plan = self._lit_plans.get((bands, gibbs, table)) if type(bands) is int else None
         if plan is None:
             bands = check_bands(bands, high=self.bands)
-            plan = self._lit_plans.get((bands, gibbs))
-            if plan is None:  # once per (bands, gibbs); a concurrent first call at worst builds it twice
+            plan = self._lit_plans.get((bands, gibbs, table))
+            if plan is None:  # once per setting; a concurrent first call at worst builds it twice
                 sun = self.table.tables.get("sun")
                 matrix = None if self._sun is None else self._sun.rgb_from_xyz
-                plan = lights.LitPlan(_Plan(self.table, bands, gibbs, c10=True), sun, matrix, gibbs)
-                self._lit_plans[(bands, gibbs)] = plan
+                rows_from = self.table.tables["irradiance"] if table else None
+                plan = lights.LitPlan(_Plan(self.table, bands, gibbs, c10=True, rows_from=rows_from), sun, matrix, gibbs)
+                self._lit_plans[(bands, gibbs, table)] = plan
         return plan
 
     def _lit(self, frame: tuple, scalar: bool, bands: Any, gibbs: bool, dering: bool, colourspace: str | None,
-             sun: bool, albedo: tuple[float, float, float] | None) -> NDArray:
+             sun: bool, albedo: tuple[float, float, float] | None, table: bool = False) -> NDArray:
         """Radiance SH of sky + sun + ground, in the output colourspace (the order of :mod:`skysh.lights`).
 
-        ``frame``: (sun_zenith, turbidity, sun_azimuth), Python floats when ``scalar``.
+        ``frame``: (sun_zenith, turbidity, sun_azimuth), Python floats when ``scalar``. ``table``: the sky
+        from the irradiance table (radiance-equivalent, never deringed), the sum deringed only after a
+        conversion whose matrix mixes signs.
         """
         if sun and self._sun is None:
-            raise ValueError("sun=True needs the coefficient file's sun table (format 3); this SkyTable has none")
+            raise ValueError("sun=True needs the coefficient file's sun table (format 3 on); this SkyTable has none")
         if albedo is not None and self.bands < 2:
             raise ValueError("ground_albedo needs the sky's band-1 coefficient c_10: this SkyTable has 1 band")
         convert = colourspace is not None and colourspace != self.colourspace
+        dering_sky = dering and not table
         if scalar:
             ts, t, phi = frame
             phi = _check_frame(ts, t, phi)
-            plan = self._lit_plans.get((bands, gibbs)) if type(bands) is int else None
-            plan = self._lit_plan(bands, gibbs) if plan is None else plan
-            x, y = ts * _X_SCALE - _X_SHIFT, math.log(t) * _Y_SCALE - _Y_SHIFT
-            if not dering and not convert:  # the hot path: everything before one gather and rotation
+            plan = self._lit_plans.get((bands, gibbs, table)) if type(bands) is int else None
+            plan = self._lit_plan(bands, gibbs, table) if plan is None else plan
+            x, y = ts * X_SCALE - X_SHIFT, math.log(t) * Y_SCALE - Y_SHIFT
+            if not dering_sky and not convert:  # the hot path: everything before one gather and rotation
                 return plan.fused(ts, t, phi, x, y, sun, albedo)
             sky, sun_sh, e_h = plan.parts(ts, t, phi, x, y, sun)
         else:
             ts_a, t_a, phi_a, shape = self._frames(*frame)
-            plan = self._lit_plan(bands, gibbs)
+            plan = self._lit_plan(bands, gibbs, table)
             sky, sun_sh, e_h = self._lit_batch(ts_a, t_a, phi_a, shape, plan, sun)
-        if dering:
+        if dering_sky:
             sky = _dering(sky)
         if sun_sh is not None:
             sky = sky + sun_sh
@@ -411,6 +477,8 @@ class SkySH:
             sky, e_h = sky @ matrix, e_h @ matrix
         if albedo is not None:
             sky = plan.add_ground(sky, e_h, albedo)
+        if table and convert and dering and self._mixing[colourspace]:  # type: ignore[index]
+            sky = _dering(sky)
         return sky
 
     def _lit_batch(self, ts: NDArray, t: NDArray, phi: NDArray, shape: tuple[int, ...], plan: lights.LitPlan,
@@ -455,7 +523,7 @@ class SkySH:
             As :meth:`coefficients`; a coefficient table without a sun table.
         """
         if self._sun is None:
-            raise ValueError("sun_light needs the coefficient file's sun table (format 3); this SkyTable has none")
+            raise ValueError("sun_light needs the coefficient file's sun table (format 3 on); this SkyTable has none")
         if colourspace is not None and not isinstance(colourspace, str):
             raise ValueError(f"colourspace must be None or a colour-science RGB colourspace name, got {short_repr(colourspace)}")
         ts, t, phi = real_scalar(sun_zenith), real_scalar(turbidity), real_scalar(sun_azimuth)
@@ -489,7 +557,7 @@ class SkySH:
         d = self._frame_and_dirs(dirs, "dirs", bands, sun_zenith=sun_zenith, turbidity=turbidity, sun_azimuth=sun_azimuth)
         c = self.coefficients(sun_zenith, turbidity, sun_azimuth, bands, gibbs, colourspace=colourspace, sun=sun,
                               ground_albedo=ground_albedo)
-        return sh._basis(d, int(bands)) @ c
+        return sh.basis_unchecked(d, int(bands)) @ c
 
     def irradiance_at(
         self,
@@ -503,19 +571,21 @@ class SkySH:
         colourspace: str | None = None,
         sun: bool = False,
         ground_albedo: ArrayLike = 0.0,
+        irradiance_table: bool | None = None,
     ) -> NDArray[np.float64]:
         """Reconstructed irradiance (cd/m^2 x sr = lux for luminance) on surfaces with ``normals`` (..., 3) -> (..., 3).
 
         The sun's parameters are single numbers here (as :meth:`coefficients`, whose
-        ``sun`` and ``ground_albedo`` these are); ``normals`` is any batch of unit
-        vectors, empty included (an empty result).
+        ``sun``, ``ground_albedo`` and ``irradiance_table`` these are: the certified table
+        by default at 3 bands); ``normals`` is any batch of unit vectors, empty included.
         """
         d = self._frame_and_dirs(
             normals, "normals", bands, sun_zenith=sun_zenith, turbidity=turbidity, sun_azimuth=sun_azimuth
         )
         c = self.coefficients(sun_zenith, turbidity, sun_azimuth, bands, gibbs, dering=dering, irradiance=True,
-                              colourspace=colourspace, sun=sun, ground_albedo=ground_albedo)
-        return sh._basis(d, int(bands)) @ c
+                              colourspace=colourspace, sun=sun, ground_albedo=ground_albedo,
+                              irradiance_table=irradiance_table)
+        return sh.basis_unchecked(d, int(bands)) @ c
 
     def _frame_and_dirs(self, dirs: ArrayLike, name: str, bands: Any, **sun: Any) -> NDArray[np.float64]:
         """Checked directions of :meth:`radiance` / :meth:`irradiance_at`; the sun's parameters must be scalars."""
@@ -526,11 +596,11 @@ class SkySH:
         return check_dirs(dirs, name, per_point=bands * bands)
 
 
-def _dering(coeffs: NDArray[np.float64]) -> NDArray[np.float64]:
-    """:func:`skysh.dering.dering`'s coefficients (imported on first use)."""
+def _dering(coeffs: NDArray[np.float64], target: str = "irradiance") -> NDArray[np.float64]:
+    """:func:`skysh.dering.dering`'s coefficients (imported on first use); ``target="radiance"`` for irradiance in."""
     from skysh.dering import dering
 
-    return dering(coeffs)[0]
+    return dering(coeffs, target)[0]
 
 
 def _check_frame(ts: float, t: float, phi: float) -> float:

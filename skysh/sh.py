@@ -7,16 +7,16 @@ The SH mathematics every other module of skysh builds on, in the convention of
 ``i = l (l + 1) + m``, "bands" ``N`` meaning ``l = 0 .. N - 1``, coefficient arrays
 shaped ``(..., N * N, C)``, right-handed Z-up frame.
 
--   :func:`n_coeffs`, :func:`index`, :func:`lm`: the index layout.
--   :func:`basis`: the basis at unit vectors, by a Cartesian recurrence.
+-   :func:`n_coeffs`, :func:`index`, :func:`lm`, :func:`band_of_index`: the index layout.
+-   :func:`basis`: the basis at unit vectors, by a Cartesian recurrence
+    (:func:`basis_unchecked` for checked input; :func:`basis_recurrence`, its constants).
 -   :func:`evaluate`: reconstruct a function from its coefficients.
 -   :func:`project`: project a callable by quadrature, Monte Carlo, jittered
     stratified or Sobol quasi-Monte Carlo sampling.
--   :func:`rotate_z`, :func:`rotate`: rotation about Z (Habel 2008, eq. 4) and
-    by any rotation matrix.
+-   :func:`rotate_z`, :func:`rotate`, :func:`rotation_z_matrix`: rotation about Z (Habel 2008,
+    eq. 4), by any rotation matrix, and the 3x3 matrix of a rotation about +Z.
 -   :func:`convolve`, :func:`cosine_lobe`, :func:`irradiance`: zonal
     convolution and the clamped-cosine (irradiance) kernel.
--   :func:`rotation_z_matrix`: the 3x3 matrix of a rotation about +Z.
 
 Layout (as a comprehension)::
 
@@ -54,6 +54,7 @@ from skysh._checks import (
     check_scalar,
     check_seed,
     check_size,
+    read_only,
     short_repr,
 )
 
@@ -64,7 +65,11 @@ __all__ = [
     "n_coeffs",
     "index",
     "lm",
+    "band_of_index",
     "basis",
+    "basis_unchecked",
+    "BasisRecurrence",
+    "basis_recurrence",
     "evaluate",
     "project",
     "quadrature_rule",
@@ -119,16 +124,18 @@ def lm(i: int) -> tuple[int, int]:
 
 
 @cache
-def _l_of_index(bands: int) -> NDArray[np.int64]:
-    """Band l of every flat index, shape (bands**2,)."""
-    return np.repeat(np.arange(bands), 2 * np.arange(bands) + 1)
+def band_of_index(bands: int) -> NDArray[np.int64]:
+    """Band l of every flat index i < ``bands``**2 (docs/conventions.md order), read-only, cached."""
+    out = np.repeat(np.arange(bands), 2 * np.arange(bands) + 1)
+    read_only(out)
+    return out
 
 
 # --------------------------------------------------------------------------- #
 # Basis by recurrence
 # --------------------------------------------------------------------------- #
 @dataclass(frozen=True)
-class _Recurrence:
+class BasisRecurrence:
     """Constants of the normalised associated-Legendre recurrence for ``bands`` bands.
 
     With ``Q[l, m](z) = N_lm P_l^m(z) / sin(theta)^m`` (Condon-Shortley phase in
@@ -147,8 +154,13 @@ class _Recurrence:
     b: NDArray[np.float64]  # (bands, bands)
 
 
+def basis_recurrence(bands: int) -> BasisRecurrence:
+    """The recurrence's constants for ``bands`` in [1, 64] (cached, read-only): for code that evaluates the basis elsewhere."""
+    return _recurrence(check_bands(bands, high=MAX_BANDS))
+
+
 @cache
-def _recurrence(bands: int) -> _Recurrence:
+def _recurrence(bands: int) -> BasisRecurrence:
     diag = np.empty(bands)
     diag[0] = 0.5 / math.sqrt(math.pi)
     for m in range(1, bands):
@@ -161,9 +173,8 @@ def _recurrence(bands: int) -> _Recurrence:
         for m in range(0, l - 1):
             a[l, m] = math.sqrt((4 * l * l - 1) / (l * l - m * m))
             b[l, m] = math.sqrt(((l - 1) ** 2 - m * m) * (2 * l + 1) / ((2 * l - 3) * (l * l - m * m)))
-    for array in (diag, a, b):
-        array.flags.writeable = False
-    return _Recurrence(bands, diag, a, b)
+    read_only(diag, a, b)
+    return BasisRecurrence(bands, diag, a, b)
 
 
 _BLOCK: int = 4096
@@ -252,15 +263,18 @@ def basis(dirs: ArrayLike, bands: int) -> NDArray[np.float64]:
     True
     """
     bands = check_bands(bands, high=MAX_BANDS)
-    return _basis(check_dirs(dirs, per_point=bands * bands), bands)
+    return basis_unchecked(check_dirs(dirs, per_point=bands * bands), bands)
 
 
-def _basis(d: NDArray[np.float64], bands: int) -> NDArray[np.float64]:
-    """:func:`basis` of checked directions."""
+def basis_unchecked(d: NDArray[np.float64], bands: int) -> NDArray[np.float64]:
+    """:func:`basis` without its checks, for a per-frame path that checked once: ``d`` a float64 array
+    (..., 3) of unit vectors, ``bands`` an int in [1, 64]. Bad input gives wrong numbers, not an error."""
     flat = d.reshape(-1, 3)
     x, y, z = np.ascontiguousarray(flat.T)  # contiguous coordinate rows: the recurrence runs on them
     out = _basis_kn(x, y, z, bands)
     return np.moveaxis(out.reshape((bands * bands,) + d.shape[:-1]), 0, -1)
+
+
 
 
 def _coeff_bands(coeffs: NDArray, name: str = "coeffs", axis: int = 0) -> int:
@@ -272,6 +286,13 @@ def _coeff_bands(coeffs: NDArray, name: str = "coeffs", axis: int = 0) -> int:
             f"{name} must have a coefficient axis of length N**2 (1, 4, 9, ..., {MAX_BANDS}**2), got shape {coeffs.shape}"
         )
     return bands
+
+
+def _batched_bands(c: NDArray) -> int:
+    """Band count of coefficients shaped (N * N,) or (..., N * N, C)."""
+    if c.ndim == 0:
+        raise ValueError("coeffs must have shape (N*N,) or (..., N*N, C)")
+    return _coeff_bands(c, axis=0 if c.ndim == 1 else -2)
 
 
 def evaluate(coeffs: ArrayLike, dirs: ArrayLike) -> NDArray[np.float64]:
@@ -296,7 +317,7 @@ def evaluate(coeffs: ArrayLike, dirs: ArrayLike) -> NDArray[np.float64]:
         raise ValueError(f"coeffs must have shape (N*N,) or (N*N, C) with C >= 1, got {c.shape}")
     bands = _coeff_bands(c)
     d = check_dirs(dirs, per_point=max(bands * bands, c.size // c.shape[0]))
-    return _basis(d, bands) @ c
+    return basis_unchecked(d, bands) @ c
 
 
 # --------------------------------------------------------------------------- #
@@ -313,8 +334,7 @@ def gauss_legendre(n: int) -> tuple[NDArray, NDArray]:
 @lru_cache(maxsize=256)
 def _gauss_legendre(n: int) -> tuple[NDArray, NDArray]:
     nodes, weights = np.polynomial.legendre.leggauss(n)
-    nodes.flags.writeable = False
-    weights.flags.writeable = False
+    read_only(nodes, weights)
     return nodes, weights
 
 
@@ -351,12 +371,10 @@ def _quadrature_rule(n_theta: int, hemisphere: bool) -> tuple[NDArray, NDArray]:
     n_phi = 2 * n_theta
     phi = (np.arange(n_phi) + 0.5) * (2.0 * np.pi / n_phi)
     s = np.sqrt(np.maximum(0.0, 1.0 - z * z))
-    dirs = np.stack(
-        np.broadcast_arrays(s[:, None] * np.cos(phi), s[:, None] * np.sin(phi), z[:, None]), axis=-1
-    ).reshape(-1, 3)
+    dirs = np.stack(np.broadcast_arrays(s[:, None] * np.cos(phi), s[:, None] * np.sin(phi), z[:, None]), axis=-1)
     weights = np.repeat(wz * (2.0 * np.pi / n_phi), n_phi)
-    dirs.flags.writeable = False
-    weights.flags.writeable = False
+    dirs = dirs.reshape(-1, 3)
+    read_only(dirs, weights)
     return dirs, weights
 
 
@@ -365,7 +383,7 @@ def _quadrature_basis(n_theta: int, hemisphere: bool, bands: int) -> tuple[NDArr
     """Nodes and the weighted basis (bands**2, M) of a cached quadrature rule."""
     dirs, weights = _quadrature_rule(n_theta, hemisphere)
     wy = _basis_kn(dirs[:, 0], dirs[:, 1], dirs[:, 2], bands) * weights
-    wy.flags.writeable = False
+    read_only(wy)
     return dirs, wy
 
 
@@ -454,8 +472,7 @@ def project(
         n_theta = 2 * bands + 8 if n is None else max(bands, round(math.sqrt(n / 2)))
         check_size(2 * n_theta * n_theta * bands * bands, "n" if n is not None else "bands", "the basis at the nodes")
         dirs, wy = _quadrature_basis(n_theta, hemisphere, bands)
-        values = _call(f, dirs)
-        return wy @ values
+        return wy @ _call(f, dirs)
     count = DEFAULT_SAMPLES if n is None else n
     points = 1 << max(0, math.ceil(math.log2(count))) if method == "qmc" else count
     check_size(points * bands * bands, "n", "the basis at the samples")
@@ -480,13 +497,8 @@ def _call(f: Callable[[NDArray], ArrayLike], dirs: NDArray) -> NDArray:
 @cache
 def _z_pairs(bands: int) -> tuple[NDArray, NDArray, NDArray]:
     """For every (l, m > 0): flat indices of (l, m), (l, -m), and m."""
-    pos, neg, ms = [], [], []
-    for l in range(1, bands):
-        for m in range(1, l + 1):
-            pos.append(index(l, m))
-            neg.append(index(l, -m))
-            ms.append(m)
-    return np.array(pos, dtype=np.intp), np.array(neg, dtype=np.intp), np.array(ms, dtype=np.float64)
+    l, m = np.array([(l, m) for l in range(1, bands) for m in range(1, l + 1)], dtype=np.intp).reshape(-1, 2).T
+    return l * (l + 1) + m, l * (l + 1) - m, m.astype(np.float64)
 
 
 def rotate_z(coeffs: ArrayLike, angle: ArrayLike) -> NDArray[np.float64]:
@@ -522,9 +534,7 @@ def rotate_z(coeffs: ArrayLike, angle: ArrayLike) -> NDArray[np.float64]:
     try:
         shape = np.broadcast_shapes(c.shape, a.shape + (1, 1))
     except ValueError:
-        raise ValueError(
-            f"angle must broadcast with the batch axes of coeffs: shapes {a.shape} and {c.shape[:-2]}"
-        ) from None
+        raise ValueError(f"angle must broadcast with the batch axes of coeffs: shapes {a.shape} and {c.shape[:-2]}") from None
     check_size(math.prod(shape), "angle" if a.size > 1 else "coeffs", "rotated coefficients")
     pos, neg, ms = _z_pairs(bands)
     a = np.fmod(a, 2.0 * math.pi)  # m * angle stays small, so cos and sin keep their digits
@@ -552,9 +562,8 @@ def _rotation_matrix_sh(R: NDArray, bands: int) -> NDArray[np.float64]:
     """
     dirs, wy = _quadrature_basis(bands, False, bands)
     moved = dirs @ R  # rows are R^T w
-    y_moved = _basis_kn(moved[:, 0], moved[:, 1], moved[:, 2], bands)
-    d = wy @ y_moved.T
-    l_of = _l_of_index(bands)
+    d = wy @ _basis_kn(moved[:, 0], moved[:, 1], moved[:, 2], bands).T
+    l_of = band_of_index(bands)
     d[l_of[:, None] != l_of[None, :]] = 0.0  # exact zeros off the band blocks
     return d
 
@@ -589,12 +598,7 @@ def rotate(coeffs: ArrayLike, R: ArrayLike) -> NDArray[np.float64]:
         raise ValueError(f"R must have shape (3, 3), got {r.shape}")
     if not (np.allclose(r @ r.T, np.eye(3), atol=1e-9) and abs(np.linalg.det(r) - 1.0) < 1e-9):
         raise ValueError("R must be a rotation matrix (R R^T = I and det R = +1, within 1e-9)")
-    axis = 0 if c.ndim == 1 else -2
-    if c.ndim == 0:
-        raise ValueError("coeffs must have shape (N*N,) or (..., N*N, C)")
-    bands = _coeff_bands(c, axis=axis)
-    d = _rotation_matrix_sh(r, bands)
-    return d @ c
+    return _rotation_matrix_sh(r, _batched_bands(c)) @ c
 
 
 # --------------------------------------------------------------------------- #
@@ -613,30 +617,21 @@ def convolve(coeffs: ArrayLike, per_band: ArrayLike) -> NDArray[np.float64]:
     """
     c = as_float_array(coeffs, "coeffs")
     k = as_float_array(per_band, "per_band")
-    if c.ndim == 0:
-        raise ValueError("coeffs must have shape (N*N,) or (..., N*N, C)")
-    axis = 0 if c.ndim == 1 else -2
-    bands = _coeff_bands(c, axis=axis)
+    bands = _batched_bands(c)
     if k.ndim != 1 or k.shape[0] < bands:
         raise ValueError(f"per_band must have shape (>= {bands},), got {k.shape}")
-    factors = k[_l_of_index(bands)]
+    factors = k[band_of_index(bands)]
     return c * (factors if c.ndim == 1 else factors[:, None])
 
 
 @cache
 def _cosine_lobe(bands: int) -> NDArray[np.float64]:
-    a = np.zeros(bands)
-    for l in range(bands):
-        if l == 1:
-            a[l] = 2.0 * math.pi / 3.0
-        elif l % 2 == 0:
-            # Ramamoorthi & Hanrahan 2001, eq. 8:
-            # A_l = 2 pi (-1)^(l/2 - 1) / ((l + 2)(l - 1)) * l! / (2^l ((l/2)!)^2)
-            a[l] = (
-                2.0 * math.pi * (-1.0) ** (l // 2 - 1) / ((l + 2) * (l - 1))
-                * math.comb(l, l // 2) / 2.0**l
-            )
-    a.flags.writeable = False
+    # Ramamoorthi & Hanrahan 2001, eq. 8: A_1 = 2 pi / 3, zero for odd l > 1, and for even l
+    # A_l = 2 pi (-1)^(l/2 - 1) / ((l + 2)(l - 1)) * l! / (2^l ((l/2)!)^2)
+    a = np.array([2.0 * math.pi / 3.0 if l == 1 else 0.0 if l % 2 else
+                  2.0 * math.pi * (-1.0) ** (l // 2 - 1) / ((l + 2) * (l - 1)) * math.comb(l, l // 2) / 2.0**l
+                  for l in range(bands)], dtype=np.float64)
+    read_only(a)
     return a
 
 
@@ -666,9 +661,7 @@ def irradiance(coeffs: ArrayLike) -> NDArray[np.float64]:
         Irradiance SH in L * sr (cd/m^2 * sr = lux for luminance), same shape.
     """
     c = as_float_array(coeffs, "coeffs")
-    if c.ndim == 0:
-        raise ValueError("coeffs must have shape (N*N,) or (..., N*N, C)")
-    return convolve(c, _cosine_lobe(_coeff_bands(c, axis=0 if c.ndim == 1 else -2)))
+    return convolve(c, _cosine_lobe(_batched_bands(c)))
 
 
 # --------------------------------------------------------------------------- #
@@ -678,7 +671,7 @@ Y_UP_MATRIX: NDArray[np.float64] = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [
 """Rotation taking this package's Z-up frame to a right-handed Y-up frame (glTF):
 +X stays +X, +Z (zenith) goes to +Y, +Y goes to -Z (a rotation of -90 degrees
 about X; det = +1, so handedness is kept)."""
-Y_UP_MATRIX.flags.writeable = False
+read_only(Y_UP_MATRIX)
 
 
 def to_y_up(coeffs: ArrayLike) -> NDArray[np.float64]:

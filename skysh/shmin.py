@@ -3,7 +3,6 @@ The minimum of an SH function over the sphere, never above the true one
 =======================================================================
 
 -   :func:`exact_min`: exact (to rounding) for 1..3 bands, certified for 4..7 bands.
--   :func:`min_bound`: the deringing seed's conservative bound (Sloan 2017, section 2.3).
 -   :func:`sphere_quadratic`: a 3-band function as ``c + g.w + w^T Q w`` on |w| = 1.
 
 1..3 bands: ``c + g.w + w^T Q w`` (closed forms of ``docs/conventions.md``) is a trust-region
@@ -27,16 +26,17 @@ from functools import cache
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from skysh import sh
 from skysh._checks import as_float_array, check_flag
 
 __all__ = ["FORM_MAP", "MAX_MIN_BANDS", "DIRECTIONS", "COVER_RADIUS", "SPLIT", "LEVELS", "VALUE_LEVELS",
-           "sphere_quadratic", "exact_min", "min_bound"]
+           "sphere_quadratic", "exact_min", "tangent_frame"]
 
 MAX_MIN_BANDS: int = 7
 """Largest band count of :func:`exact_min` (49 coefficients)."""
 
-_Y00, _KL = 0.5 / math.sqrt(math.pi), math.sqrt(3.0) / (2.0 * math.sqrt(math.pi))
-_KB, _K0, _K2 = (
+Y00, K_LINEAR = 0.5 / math.sqrt(math.pi), math.sqrt(3.0) / (2.0 * math.sqrt(math.pi))
+K_PRODUCT, K_ZONAL, K_SECTORAL = (
     math.sqrt(15.0) / (2 * math.sqrt(math.pi)),
     math.sqrt(5.0) / (4 * math.sqrt(math.pi)),
     math.sqrt(15.0) / (4 * math.sqrt(math.pi)),
@@ -46,14 +46,14 @@ _KB, _K0, _K2 = (
 
 def _form_map() -> NDArray[np.float64]:
     m = np.zeros((9, 13))
-    m[0, 0] = _Y00
-    m[3, 1], m[1, 2], m[2, 3] = -_KL, -_KL, _KL  # g = K (-f3, -f1, f2): the seed's optimal linear direction
+    m[0, 0] = Y00
+    m[3, 1], m[1, 2], m[2, 3] = -K_LINEAR, -K_LINEAR, K_LINEAR  # g = K (-f3, -f1, f2): the seed's optimal linear direction
     q = m[:, 4:].reshape(9, 3, 3)  # a view: Q row-major
-    q[4, 0, 1] = q[4, 1, 0] = _KB / 2  # (2,-2):  KB x y
-    q[5, 1, 2] = q[5, 2, 1] = -_KB / 2  # (2,-1): -KB y z
-    q[6] = np.diag([-_K0, -_K0, 2 * _K0])  # (2, 0):  K0 (3 z^2 - 1) = K0 (2 z^2 - x^2 - y^2)
-    q[7, 0, 2] = q[7, 2, 0] = -_KB / 2  # (2, 1): -KB x z
-    q[8] = np.diag([_K2, -_K2, 0.0])  # (2, 2):  K2 (x^2 - y^2)
+    q[4, 0, 1] = q[4, 1, 0] = K_PRODUCT / 2  # (2,-2):  KB x y
+    q[5, 1, 2] = q[5, 2, 1] = -K_PRODUCT / 2  # (2,-1): -KB y z
+    q[6] = np.diag([-K_ZONAL, -K_ZONAL, 2 * K_ZONAL])  # (2, 0):  K0 (3 z^2 - 1) = K0 (2 z^2 - x^2 - y^2)
+    q[7, 0, 2] = q[7, 2, 0] = -K_PRODUCT / 2  # (2, 1): -KB x z
+    q[8] = np.diag([K_SECTORAL, -K_SECTORAL, 0.0])  # (2, 2):  K2 (x^2 - y^2)
     m.flags.writeable = False
     return m
 
@@ -61,25 +61,25 @@ def _form_map() -> NDArray[np.float64]:
 FORM_MAP: NDArray[np.float64] = _form_map()
 """(9, 13): 3-band coefficients -> (c, g (3), Q (3 x 3, row-major)) of ``c + g.w + w^T Q w``."""
 
-_NEWTON_STEPS: int = 4
+NEWTON_STEPS: int = 4
 """Newton steps after the cluster bounds (one precedes them): rounding at 4 on random and
 adversarial problems (``tools/dering_experiment.py``); fewer only loosen the bound."""
 
-_ALLOWANCE: float = 256.0 * np.finfo(np.float64).eps * 4.1
+ALLOWANCE: float = 256.0 * np.finfo(np.float64).eps * 4.1
 """Rounding allowance of the 3-band minimum in normalised units (largest |coefficient| in
 [1/2, 1)): 256 eps of 4.1 >= |c| + |g| + |Q|_F (0.886 + 1.772 + 1.356 with the irradiance
 kernel), against eigh's backward error and the dual's dozen operations (measured <= 4e-16)."""
 
-_SAMPLE_ROUNDING: float = 2.0**-40
+SAMPLE_ROUNDING: float = 2.0**-40
 """Allowance of a sampled value per unit of ``sum_l |f_l| sqrt((2l+1)/(4 pi)) >= max |f|``."""
 
-_TINY, _FLOOR, _POLE = 1e-300, 1e-140, 1e-90
+TINY, FLOOR, POLE = 1e-300, 1e-140, 1e-90
 """Guards (normalised units): denominator offset, least x (x^2 normal), least gap (a / d^3 finite)."""
 
-DIRECTIONS: int = 1024
+DIRECTIONS: int = 4096
 """Level-0 sample directions of the 4..7-band certificate (a Fibonacci lattice)."""
 
-COVER_RADIUS: float = 0.0854
+COVER_RADIUS: float = 0.0427
 """Their covering radius (rad), rounded up: the largest circumradius of their spherical
 Delaunay triangles (printed by the experiment, checked by ``tests/test_dering.py``)."""
 
@@ -92,11 +92,12 @@ LEVELS, VALUE_LEVELS = 6, 12
 :func:`exact_min` (2.9e-5 rad)."""
 
 _CELL_BUDGET, _VALUE_BUDGET = 2_000, 20_000
+_POINT_BLOCK: int = 1 << 16
 """Cells kept per function beyond which refinement stops (the bound stays valid, looser):
 caps the cost of ring-shaped or flat minima (a lone light's irradiance)."""
 
 
-def _check(coeffs: ArrayLike, name: str = "coeffs", high: int = MAX_MIN_BANDS) -> tuple[NDArray, bool, int]:
+def check_coeffs(coeffs: ArrayLike, name: str = "coeffs", high: int = MAX_MIN_BANDS) -> tuple[NDArray, bool, int]:
     """(..., K, C) float64 view, whether the input was (K,), and the band count in [1, high]."""
     c = as_float_array(coeffs, name)
     vector = c.ndim == 1
@@ -108,7 +109,7 @@ def _check(coeffs: ArrayLike, name: str = "coeffs", high: int = MAX_MIN_BANDS) -
     return c, vector, bands
 
 
-def _normalised(f: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+def normalised(f: NDArray) -> tuple[NDArray, NDArray, NDArray]:
     """f (..., K) times 2^-e (exact; e from frexp of max |f|, so the largest is in [1/2, 1)),
     e, and where f is zero."""
     m = np.maximum.reduce(np.abs(f), -1)
@@ -126,24 +127,23 @@ def sphere_quadratic(coeffs: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:
     return m[..., 0], m[..., 1:4], m[..., 4:].reshape(m.shape[:-1] + (3, 3))
 
 
-def _prefix(lam: NDArray, a: NDArray) -> tuple[NDArray, NDArray]:
-    """Gaps d = lam - lam_1 (lam ascending) and a proven lower bound of the secular root,
-    ``max(_FLOOR, max_k sqrt(a_1 + .. + a_k) - d_k)``."""
-    d = lam - lam[..., :1]
-    return d, np.maximum(np.maximum.reduce(np.sqrt(np.cumsum(a, -1)) - d, -1), _FLOOR)
+def prefix_bound(d: NDArray, a: NDArray) -> NDArray:
+    """A proven lower bound of the secular root from the gaps d (..., n) (ascending, d_1 = 0) and
+    the weights a: ``max(FLOOR, max_k sqrt(a_1 + .. + a_k) - d_k)``."""
+    return np.maximum(np.maximum.reduce(np.sqrt(np.cumsum(a, -1)) - d, -1), FLOOR)
 
 
-def _candidates(d: NDArray, a: NDArray, x: NDArray) -> NDArray:
+def cluster_bounds(d: NDArray, a: NDArray, x: NDArray) -> NDArray:
     """x raised to proven lower bounds of the root, one pair per split into a pole cluster 1..k
     (merged at its largest gap d_k, which lowers S; A its a) and the rest (gaps d_i - d_k, sums
     C0, T0 of a_i / gap^2, a_i / gap^3): ``(sqrt(C0) - 1) C0 / T0`` and ``min(sqrt(A / (2 (1 -
     C0))), cbrt(A / (4 T0)))``, each less d_k (docs/dering.md). They matter for clusters."""
     shift = d[..., :-1]
-    far = np.maximum(d[..., None, :] - shift[..., None], _POLE)  # (..., split k, i)
+    far = np.maximum(d[..., None, :] - shift[..., None], POLE)  # (..., split k, i)
     u = a[..., None, :] * _REST[d.shape[-1]] / (far * far)
-    c0, t0 = np.add.reduce(u, -1), np.add.reduce(u / far, -1) + _TINY
+    c0, t0 = np.add.reduce(u, -1), np.add.reduce(u / far, -1) + TINY
     big = np.cumsum(a[..., :-1], -1)
-    near = np.minimum(np.sqrt(big / (2.0 * np.maximum(1.0 - c0, 0.0) + _TINY)), np.cbrt(big / (4.0 * t0)))
+    near = np.minimum(np.sqrt(big / (2.0 * np.maximum(1.0 - c0, 0.0) + TINY)), np.cbrt(big / (4.0 * t0)))
     return np.maximum(np.maximum.reduce(np.maximum((np.sqrt(c0) - 1.0) * c0 / t0, near) - shift, -1), x)
 
 
@@ -151,39 +151,40 @@ _REST: dict[int, NDArray] = {n: np.triu(np.ones((n - 1, n)), 1) for n in (2, 3)}
 """(n - 1, n) masks: row k marks the rest i > k of the split after pole k + 1."""
 
 
-def _newton(d: NDArray, a: NDArray, x: NDArray, steps: int) -> NDArray:
+def newton(d: NDArray, a: NDArray, x: NDArray, steps: int) -> NDArray:
     """Newton's steps on 1 / sqrt(S(x)) = 1 from a start left of the root, never below it."""
     low = x
     for _ in range(steps):
         w = 1.0 / (d + x[..., None])
         aw2 = a * w * w
         s = np.add.reduce(aw2, -1)
-        x = np.maximum(x + (np.sqrt(s) - 1.0) * s / (np.add.reduce(aw2 * w, -1) + _TINY), low)
+        x = np.maximum(x + (np.sqrt(s) - 1.0) * s / (np.add.reduce(aw2 * w, -1) + TINY), low)
     return x
 
 
-def _dual(c: NDArray, lam: NDArray, d: NDArray, a: NDArray, x: NDArray) -> NDArray:
+def dual(c: NDArray, lam: NDArray, d: NDArray, a: NDArray, x: NDArray) -> NDArray:
     """``c + lam_1 - x - sum a_i / (d_i + x)``: never above the minimum, for any x > 0."""
     return c + lam[..., 0] - x - np.add.reduce(a / (d + x[..., None]), -1)
 
 
-def _trs(c: NDArray, g: NDArray, q: NDArray) -> tuple[NDArray, NDArray]:
+def trust_region_min(c: NDArray, g: NDArray, q: NDArray, steps: int = NEWTON_STEPS) -> tuple[NDArray, NDArray]:
     """Certified minimum of ``c + g.w + w^T Q w`` on |w| = 1 (2 or 3 dimensions) and a minimiser
     (with its hard-case component along the first eigenvector), batched: one Newton step
-    from the proven bound, the cluster bounds, then _NEWTON_STEPS more."""
+    from the proven bound, the cluster bounds, then ``steps`` more."""
     lam, v = np.linalg.eigh(q)
     gam = np.einsum("...ji,...j->...i", v, g)
     a = 0.25 * gam * gam
-    d, x = _prefix(lam, a)
-    x = _newton(d, a, _candidates(d, a, _newton(d, a, x, 1)), _NEWTON_STEPS)
+    d = lam - lam[..., :1]
+    x = prefix_bound(d, a)
+    x = newton(d, a, cluster_bounds(d, a, newton(d, a, x, 1)), steps)
     zero = (c == 0.0) & np.logical_and.reduce(g == 0.0, -1) & np.logical_and.reduce(q == 0.0, (-2, -1))
     y = -0.5 * gam / (d + x[..., None])
     y[..., 0] += np.sqrt(np.maximum(1.0 - np.einsum("...i,...i->...", y, y), 0.0))
     w = np.einsum("...ij,...j->...i", v, y)
-    return np.where(zero, 0.0, _dual(c, lam, d, a, x) - _ALLOWANCE), w / np.linalg.norm(w, axis=-1, keepdims=True)
+    return np.where(zero, 0.0, dual(c, lam, d, a, x) - ALLOWANCE), w / np.linalg.norm(w, axis=-1, keepdims=True)
 
 
-def _fibonacci(n: int) -> NDArray[np.float64]:
+def fibonacci(n: int) -> NDArray[np.float64]:
     """n nearly uniform unit vectors (Fibonacci lattice)."""
     i = np.arange(n) + 0.5
     z, phi = 1.0 - 2.0 * i / n, i * math.pi * (3.0 - math.sqrt(5.0))
@@ -191,7 +192,7 @@ def _fibonacci(n: int) -> NDArray[np.float64]:
     return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
 
 
-def _frame(p: NDArray) -> tuple[NDArray, NDArray]:
+def tangent_frame(p: NDArray) -> tuple[NDArray, NDArray]:
     """Orthonormal tangents of unit vectors p (..., 3) (Duff et al. 2017, exact at +-Z)."""
     x, y, z = p[..., 0], p[..., 1], p[..., 2]
     sign = np.copysign(1.0, z)
@@ -203,24 +204,39 @@ def _frame(p: NDArray) -> tuple[NDArray, NDArray]:
 @cache
 def _grid(bands: int) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     """Level-0 directions (M, 3), their basis (K, M) and tangent frames, cached."""
-    from skysh import sh
-
-    dirs = _fibonacci(DIRECTIONS)
-    out = (dirs, np.ascontiguousarray(sh.basis(dirs, bands).T), *_frame(dirs))
+    dirs = fibonacci(DIRECTIONS)
+    out = (dirs, np.ascontiguousarray(sh.basis(dirs, bands).T), *tangent_frame(dirs))
     for array in out:
         array.flags.writeable = False
     return out
 
 
-def _level0(f: NDArray, rows: NDArray) -> NDArray:
-    """Values (..., R, M) at the level-0 directions of f (..., K) windowed by each row (R, N)
-    of per-band factors, from one partial sum per band."""
+def level0_basis(bands: int) -> NDArray[np.float64]:
+    """The basis (K, :data:`DIRECTIONS`) at the certificate's level-0 directions, read-only, cached."""
+    return _grid(bands)[1]
+
+
+def curvature(f: NDArray) -> tuple[NDArray, NDArray]:
+    """Per function of f (..., K): the bound K2 of |f''| along great circles, ``sum_l l^2
+    |f_l|_2 sqrt((2l+1)/(4 pi))`` (Bernstein per band), and the rounding allowance of a
+    sampled value, :data:`SAMPLE_ROUNDING` times ``sum_l |f_l|_2 sqrt((2l+1)/(4 pi)) >= max |f|``."""
     bands = math.isqrt(f.shape[-1])
-    y0 = _grid(bands)[1]
-    return rows @ np.stack([f[..., l * l : (l + 1) ** 2] @ y0[l * l : (l + 1) ** 2] for l in range(bands)], -2)
+    norms = np.sqrt(np.add.reduceat(f * f, np.arange(bands) ** 2, axis=-1)) * np.sqrt((2 * np.arange(bands) + 1) / (4 * math.pi))
+    return norms @ (np.arange(bands) ** 2.0), SAMPLE_ROUNDING * np.add.reduce(norms, -1)
 
 
-def _sampled_min(f: NDArray, thr: NDArray | float, levels: int = LEVELS, vals: NDArray | None = None,
+def _values(f: NDArray, item: NDArray, p: NDArray) -> NDArray:
+    """Values ``f[item[i]]`` at the unit vectors p[i], in blocks of :data:`_POINT_BLOCK` points:
+    for a few functions all of them at every point (one matrix product, then a pick)."""
+    bands, out = math.isqrt(f.shape[-1]), np.empty(len(p))
+    for s in range(0, len(p), _POINT_BLOCK):
+        y, it = sh.basis(p[s : s + _POINT_BLOCK], bands), item[s : s + _POINT_BLOCK]
+        out[s : s + _POINT_BLOCK] = (np.take_along_axis(y @ f.T, it[:, None], 1)[:, 0] if len(f) <= 8
+                                     else np.einsum("ik,ik->i", f[it], y))
+    return out
+
+
+def certified_min(f: NDArray, thr: NDArray | float, levels: int = LEVELS, vals: NDArray | None = None,
                  budget: int = _CELL_BUDGET) -> tuple[NDArray, NDArray, NDArray]:
     """Certified lower bound (P,), best sampled value (P,) and its direction (P, 3) of f (P, K)
     (level-0 values ``vals`` (P, M) if known).
@@ -234,12 +250,9 @@ def _sampled_min(f: NDArray, thr: NDArray | float, levels: int = LEVELS, vals: N
     kept estimates) is never above the minimum, except that where a value below thr was
     sampled (refinement then stops: "minimum >= thr" is refuted) it is that value.
     """
-    from skysh import sh
-
     bands = math.isqrt(f.shape[-1])
     dirs, y0, e1, e2 = _grid(bands)
-    norms = np.sqrt(np.add.reduceat(f * f, np.arange(bands) ** 2, axis=-1)) * np.sqrt((2 * np.arange(bands) + 1) / (4 * math.pi))
-    k2, allow = norms @ (np.arange(bands) ** 2.0), _SAMPLE_ROUNDING * np.add.reduce(norms, -1)
+    k2, allow = curvature(f)
     vals = f @ y0 if vals is None else vals
     j = np.argmin(vals, -1)
     best, point = vals[np.arange(len(f)), j], dirs[j]
@@ -247,8 +260,9 @@ def _sampled_min(f: NDArray, thr: NDArray | float, levels: int = LEVELS, vals: N
     item, root = np.nonzero(low0 < np.minimum(best, thr)[:, None])
     centre, half, lower = np.zeros((len(item), 2)), COVER_RADIUS, low0[item, root]
     frozen_item, frozen_lower = [item[:0]], [lower[:0]]
+    hopeless = np.where(np.isfinite(thr), thr + k2 * (COVER_RADIUS / SPLIT**levels) ** 2 + allow, -np.inf)
     for _level in range(levels):
-        big = np.bincount(item, minlength=len(f))[item] > budget  # stop refining these functions
+        big = (np.bincount(item, minlength=len(f))[item] > budget) | (best < hopeless)[item]  # stop refining these
         frozen_item.append(item[big])
         frozen_lower.append(lower[big])
         item, root, centre, lower = item[~big], root[~big], centre[~big], lower[~big]
@@ -261,7 +275,7 @@ def _sampled_min(f: NDArray, thr: NDArray | float, levels: int = LEVELS, vals: N
         r = np.hypot(centre[:, 0], centre[:, 1])[:, None]
         p = np.cos(r) * dirs[root] + np.sinc(r / math.pi) * (centre[:, :1] * e1[root] + centre[:, 1:] * e2[root])
         p /= np.linalg.norm(p, axis=-1, keepdims=True)
-        v = np.einsum("ik,ik->i", f[item], sh.basis(p, bands))
+        v = _values(f, item, p)
         np.minimum.at(best, item, v)
         hit = v <= best[item]
         point[item[hit]] = p[hit]
@@ -295,66 +309,17 @@ def exact_min(coeffs: ArrayLike, return_dirs: bool = False) -> NDArray[np.float6
     |coefficient| to [1/2, 1)): exact to rounding. 4..7 bands: the sampling certificate
     (:data:`VALUE_LEVELS` levels); its gap to the value at the direction is its slack.
     """
-    c, vector, bands = _check(coeffs)
+    c, vector, bands = check_coeffs(coeffs)
     return_dirs = check_flag(return_dirs, "return_dirs")
-    t, e, _ = _normalised(np.moveaxis(c, -2, -1))  # (..., C, K)
+    t, e, _ = normalised(np.moveaxis(c, -2, -1))  # (..., C, K)
     if bands <= 3:
         q = t @ FORM_MAP[: bands * bands]
-        val, w = _trs(q[..., 0], q[..., 1:4], q[..., 4:].reshape(q.shape[:-1] + (3, 3)))
+        val, w = trust_region_min(q[..., 0], q[..., 1:4], q[..., 4:].reshape(q.shape[:-1] + (3, 3)))
     else:
-        val, _, w = _sampled_min(t.reshape(-1, bands * bands), np.inf, VALUE_LEVELS, budget=_VALUE_BUDGET)
+        val, _, w = certified_min(t.reshape(-1, bands * bands), np.inf, VALUE_LEVELS, budget=_VALUE_BUDGET)
         val, w = val.reshape(t.shape[:-1]), w.reshape(t.shape[:-1] + (3,))
     val = np.ldexp(val, e)
     result: float | NDArray = float(val[0]) if vector else val
     if vector:
         w = w[0]
     return (result, w) if return_dirs else result
-
-
-def min_bound(coeffs: ArrayLike) -> NDArray[np.float64] | float:
-    """
-    The seed's conservative lower bound of a 3-band function's minimum (section 2.3).
-
-    Parameters
-    ----------
-    coeffs
-        Shape (9,), (9, C) or (..., 9, C), any unit.
-
-    Returns
-    -------
-    float or ndarray
-        Per channel ((9,): a float). Never above the minimum; equal to it for functions zonal
-        about their optimal linear direction. For comparison only (deringing uses exact_min).
-
-    Notes
-    -----
-    The seed's steps: the optimal linear direction (-f3, -f1, f2) to +Z (Duff et al. frame);
-    the zonal quadratic (eq. 3) exact; the |m| = 2 pair (eq. 4) at its worst phase, ``-T (1 -
-    z^2)``; the |m| = 1 pair (eq. 5) at its worst phase in both hemispheres, ``-S |z| sqrt(1 -
-    z^2)`` ("run twice with the sign negated"). Its global minimum over z replaces Newton's
-    method from -1/sqrt(2): with u = (z, +-sqrt(1 - z^2)) it is the 2-D trust-region problem
-    ``c' + b u_1 + a u_1^2 - S u_1 u_2`` on the unit circle, solved as in :func:`exact_min`.
-
-    Examples
-    --------
-    >>> round(min_bound(np.eye(9)[0]), 6)  # the constant Y00
-    0.282095
-    >>> round(min_bound(np.eye(9)[2]), 6)  # Y10 = sqrt(3) z / (2 sqrt(pi)), least at z = -1
-    -0.488603
-    """
-    c, vector, _ = _check(coeffs, high=3)
-    if c.shape[-2] != 9:
-        raise ValueError(f"coeffs must have 9 coefficients (3 bands) on axis -2, got {c.shape[-2]}")
-    t, e, _ = _normalised(np.moveaxis(c, -2, -1))
-    q = t @ FORM_MAP
-    g = q[..., 1:4]
-    b = np.linalg.norm(g, axis=-1)
-    v = np.where(b[..., None] > 0.0, g / np.where(b > 0.0, b, 1.0)[..., None], np.array([0.0, 0.0, 1.0]))
-    v /= np.linalg.norm(v, axis=-1, keepdims=True)
-    frame = np.stack([*_frame(v), v], -1)  # columns e1, e2, v
-    r = np.swapaxes(frame, -1, -2) @ q[..., 4:].reshape(q.shape[:-1] + (3, 3)) @ frame
-    zon = r[..., 2, 2]
-    t2, s = np.hypot(0.5 * (r[..., 0, 0] - r[..., 1, 1]), r[..., 0, 1]), 2.0 * np.hypot(r[..., 0, 2], r[..., 1, 2])
-    m2 = np.stack([np.stack([1.5 * zon + t2, -0.5 * s], -1), np.stack([-0.5 * s, np.zeros_like(s)], -1)], -2)
-    val = np.ldexp(_trs(q[..., 0] - 0.5 * zon - t2, np.stack([b, np.zeros_like(b)], -1), m2)[0], e)
-    return float(val[0]) if vector else val

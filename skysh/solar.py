@@ -102,7 +102,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from skysh import poly, sh
-from skysh._checks import as_float_array, check_bands, check_choice, check_dirs, check_range
+from skysh._checks import as_float_array, check_bands, check_choice, check_dirs, check_range, read_only
 
 __all__ = [
     "SUN_ZENITH_RANGE", "TURBIDITY_RANGE", "SOLAR_WAVELENGTHS", "SOLAR_RADIANCE", "OZONE_WAVELENGTHS",
@@ -114,7 +114,7 @@ __all__ = [
     "SUN_WINDOW_KINDS", "SUN_WINDOW_MARGIN", "relative_optical_mass", "angstrom_beta", "transmittance",
     "spectral_radiance", "tristimulus", "luminance", "direct_normal_illuminance", "illuminance_xyz",
     "illuminance_rgb", "extraterrestrial_xyz", "sun_direction", "sun_window", "sun_window_family",
-    "delta_irradiance_error", "derive_sun_window", "sun_sh",
+    "delta_irradiance_error", "delta_irradiance_minimum", "derive_sun_window", "sun_sh",
 ]
 
 # --------------------------------------------------------------------------- #
@@ -231,11 +231,8 @@ LUMINOUS_EFFICACY: float = 683.0
 CMFS_NAME: str = "CIE 1931 2 Degree Standard Observer"
 """The colour-science colour matching functions used (its ybar is the CIE 1924 V(lambda))."""
 
-for _array in (
-    SOLAR_WAVELENGTHS, SOLAR_RADIANCE, OZONE_WAVELENGTHS, OZONE_ABSORPTION, MIXED_GAS_WAVELENGTHS,
-    MIXED_GAS_ABSORPTION, WATER_VAPOUR_WAVELENGTHS, WATER_VAPOUR_ABSORPTION, WAVELENGTHS,
-):
-    _array.flags.writeable = False
+read_only(SOLAR_WAVELENGTHS, SOLAR_RADIANCE, OZONE_WAVELENGTHS, OZONE_ABSORPTION, MIXED_GAS_WAVELENGTHS,
+          MIXED_GAS_ABSORPTION, WATER_VAPOUR_WAVELENGTHS, WATER_VAPOUR_ABSORPTION, WAVELENGTHS)
 
 
 def _depths(wavelengths: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -269,8 +266,7 @@ _TRAPEZOID.flags.writeable = False
 # --------------------------------------------------------------------------- #
 def _check_sun(sun_zenith: ArrayLike, turbidity: ArrayLike) -> tuple[NDArray, NDArray]:
     ts = check_range(sun_zenith, "sun_zenith", *SUN_ZENITH_RANGE, unit="rad")
-    t = check_range(turbidity, "turbidity", *TURBIDITY_RANGE)
-    return ts, t
+    return ts, check_range(turbidity, "turbidity", *TURBIDITY_RANGE)
 
 
 def relative_optical_mass(sun_zenith: ArrayLike) -> NDArray[np.float64]:
@@ -317,9 +313,7 @@ def _grid_for(wavelengths: ArrayLike | None) -> NDArray:
     return _depths(w)
 
 
-def transmittance(
-    sun_zenith: ArrayLike, turbidity: ArrayLike, wavelengths: ArrayLike | None = None
-) -> NDArray[np.float64]:
+def transmittance(sun_zenith: ArrayLike, turbidity: ArrayLike, wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:
     """Spectral transmittance tau_R tau_a tau_o tau_g tau_wa of the direct beam, (..., W) in (0, 1].
 
     Arguments as in :func:`spectral_radiance`.
@@ -328,9 +322,7 @@ def transmittance(
     return _transmittance(ts, t, _grid_for(wavelengths))
 
 
-def spectral_radiance(
-    sun_zenith: ArrayLike, turbidity: ArrayLike, wavelengths: ArrayLike | None = None
-) -> NDArray[np.float64]:
+def spectral_radiance(sun_zenith: ArrayLike, turbidity: ArrayLike, wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:
     """
     Spectral radiance of the solar disk seen through the atmosphere.
 
@@ -354,9 +346,9 @@ def spectral_radiance(
 @lru_cache(maxsize=1)
 def _cmf_weights() -> NDArray[np.float64]:
     """(W, 3): K_m x trapezoid weight (1 nm) x the CIE 1931 xbar, ybar, zbar at :data:`WAVELENGTHS`."""
-    import colour  # heavy; imported on first colour integral
+    from skysh.preetham import import_colour  # colour-science is heavy: imported on the first colour integral
 
-    cmfs = colour.MSDS_CMFS[CMFS_NAME]
+    cmfs = import_colour().MSDS_CMFS[CMFS_NAME]
     table = np.array(cmfs[WAVELENGTHS], dtype=np.float64)  # tabulated at 1 nm: no interpolation
     weights = LUMINOUS_EFFICACY * _TRAPEZOID[:, None] * table
     weights.flags.writeable = False
@@ -557,6 +549,12 @@ def _irradiance_series(window: ArrayLike) -> NDArray[np.float64]:
     return _WINDOW_KERNEL[: s.shape[0]] * s * (2 * ell + 1) / (4.0 * math.pi)
 
 
+def delta_irradiance_minimum(window: ArrayLike) -> float:
+    """Exact minimum over all normals of a unit delta light's irradiance windowed by ``window``
+    (per-band factors, shape (N,), 1 <= N <= 7), sr^-1; the unwindowed mean is 1/4."""
+    return _series_minimum(_irradiance_series(window))
+
+
 def _series_minimum(series: NDArray[np.float64]) -> float:
     """Exact minimum over t in [-1, 1] of a Legendre series: endpoints and real roots of its derivative."""
     from numpy.polynomial import legendre
@@ -599,7 +597,7 @@ def _largest_attenuation(cutoff: float, bands: int) -> float | None:
     mean = 0.25  # A_0 s_0 / (4 pi) = pi / (4 pi): the irradiance's mean for a unit delta
 
     def ok(a: float) -> bool:
-        return _series_minimum(_irradiance_series(sun_window_family(cutoff, a, bands))) >= SUN_WINDOW_MARGIN * mean
+        return delta_irradiance_minimum(sun_window_family(cutoff, a, bands)) >= SUN_WINDOW_MARGIN * mean
 
     if ok(1.0):
         return 1.0

@@ -110,6 +110,7 @@ __all__ = [
     "SolarEphemeris",
     "position",
     "position_unchecked",
+    "as_utc",
     "ephemeris",
     "compass_to_frame",
     "frame_to_compass",
@@ -175,9 +176,10 @@ _UTC_RANGE_TEXT: str = "0001-01-01T00:00:00Z .. 9999-12-31T23:59:59.999999Z"
 """The instants a ``when`` may name: Python's datetime range, in UTC."""
 
 
-def _utc(when: _dt.datetime | str, name: str = "when") -> _dt.datetime:
-    """Return ``when`` as an aware UTC datetime; refuse naive datetimes, other types and instants
-    outside Python's datetime range in UTC. ``name`` is the parameter (or flag) named in messages."""
+def as_utc(when: _dt.datetime | str, name: str = "when") -> _dt.datetime:
+    """Return ``when`` (an aware datetime or an ISO-8601 string with an offset) as an aware UTC datetime;
+    refuse naive datetimes, other types and instants outside Python's datetime range in UTC with a
+    ValueError naming ``name`` (the parameter, or a command-line flag)."""
     if isinstance(when, str):
         text = when.strip()
         if text[-1:] in ("Z", "z"):  # Python 3.10's fromisoformat does not read "Z"
@@ -212,6 +214,8 @@ def _utc(when: _dt.datetime | str, name: str = "when") -> _dt.datetime:
         raise ValueError(
             f"{name} must lie in {_UTC_RANGE_TEXT} once converted to UTC (Python's datetime range), got {when.isoformat()}"
         ) from None
+
+
 
 
 def _julian_century(utc: _dt.datetime) -> float:
@@ -303,7 +307,7 @@ def ephemeris(when: _dt.datetime | str) -> SolarEphemeris:
     >>> round(math.degrees(e.declination), 5)
     -7.78507
     """
-    t = _julian_century(_utc(when))
+    t = _julian_century(as_utc(when))
     lam, eps, alpha, delta, eot_minutes, _ = _ephemeris_deg(t)
     return SolarEphemeris(
         julian_century=t,
@@ -393,7 +397,7 @@ def position_unchecked(
         ) from error
     check_size(8 * lat_deg.size, "latitude" if np.size(latitude) >= np.size(longitude) else "longitude",
                f"{lat_deg.size:,} places")
-    utc = _utc(when)
+    utc = as_utc(when)
     _, _, _, declination_deg, eot_minutes, _ = _ephemeris_deg(_julian_century(utc))
 
     # True solar time (minutes) and hour angle (NOAA columns AB, AC), positive West.
@@ -426,15 +430,9 @@ def position(
 
     Parameters
     ----------
-    latitude
-        Geographic latitude in **degrees** (as on a map), positive North,
-        [-90, 90]. Any array shape, broadcast against ``longitude``.
-    longitude
-        Geographic longitude in **degrees**, positive East, [-180, 180].
-    when
-        Timezone-aware :class:`datetime.datetime`, or an ISO-8601 string with a
-        UTC offset, e.g. ``"2024-06-21T12:00:00+02:00"``. Naive datetimes are
-        refused.
+    latitude, longitude, when
+        As :func:`position_unchecked`: degrees (as on a map) and an aware time,
+        e.g. ``"2024-06-21T12:00:00+02:00"``.
     refraction
         Apply NOAA's standard-atmosphere refraction (default; the apparent
         sun, as seen). ``False``: the geometric zenith.
@@ -466,7 +464,7 @@ def position(
     if np.any(below):
         lat_b, lon_b, z_b = np.broadcast_arrays(np.asarray(latitude, float), np.asarray(longitude, float), z)
         k = np.flatnonzero(below.ravel())[0]
-        utc = _utc(when)
+        utc = as_utc(when)
         raise ValueError(
             f"the sun is below the horizon at {utc.isoformat()} for latitude {lat_b.ravel()[k]:g} deg, "
             f"longitude {lon_b.ravel()[k]:g} deg (sun zenith {math.degrees(z_b.ravel()[k]):.2f} deg > 90 deg): "

@@ -15,18 +15,22 @@ Everything it computes comes from skysh, generated when the files are written:
 
 -   The per-frame coefficients come from the JavaScript runtime of
     :func:`skysh.export.export_source` (``"js"``, every band the coefficient file
-    holds), inlined into ``index.html`` as a ``<script type="module">``:
+    holds), with the Python runtime's defaults (the certified irradiance table for
+    3-band irradiance and engine presets; a box gives the old pipeline,
+    ``irradiance_table=False``); the scene's irradiance is the runtime's
+    ``irradiance: true`` call, not A_l times the radiance shown. The runtime is
+    inlined into ``index.html`` as a ``<script type="module">``:
     Chromium refuses module scripts loaded from ``file://`` (CORS), so the page
     loads no module file. Its classic scripts (``sky.js``, ``shaders.js``,
     ``viewer.js``) load from ``file://`` as from a server.
 -   The true sky (Preetham 1999, appendix), evaluated per pixel in the fragment
     shader and in double precision on the CPU, takes its constants from
     :mod:`skysh.preetham`: the Perez tables, the zenith-chromaticity matrices,
-    the zenith-luminance formula (read off ``preetham._zenith_luminance`` by
+    the zenith-luminance formula (read off ``preetham.zenith_luminance_unchecked`` by
     evaluating it, see :func:`zenith_luminance_form`) and the XYZ -> RGB matrix
     of the coefficient file's colourspace.
--   The SH basis uses :mod:`skysh.sh`'s recurrence constants; the irradiance
-    its clamped-cosine factors; the tone mapping :mod:`skysh.render`'s key.
+-   The SH basis uses :mod:`skysh.sh`'s recurrence constants; the tone mapping
+    :mod:`skysh.render`'s key.
 -   The engine snippets are :func:`skysh.engines.snippet` turned into templates
     (:func:`snippet_templates`): one source of truth for their text.
 
@@ -111,7 +115,7 @@ _CSP: str = (
 # Constants generated from skysh
 # --------------------------------------------------------------------------- #
 class _TanProbe:
-    """``ops`` for ``preetham._zenith_luminance``: records the tan argument, returns a chosen value."""
+    """``ops`` for ``preetham.zenith_luminance_unchecked``: records the tan argument, returns a chosen value."""
 
     def __init__(self, value: float) -> None:
         self.value = value
@@ -127,7 +131,7 @@ def zenith_luminance_form() -> dict[str, float]:
     The constants of Preetham's zenith luminance, read off :mod:`skysh.preetham` by evaluation.
 
     ``Y_z = (a T + b) tan(chi) + c T + d`` cd/m^2 with ``chi = (chi0 + chi1 T) (pi - 2 ts)``
-    (Preetham 1999, appendix). ``preetham._zenith_luminance`` keeps its numbers inline; it is
+    (Preetham 1999, appendix). ``preetham.zenith_luminance_unchecked`` keeps its numbers inline; it is
     affine in ``tan(chi)`` and in T, so four evaluations with a ``tan`` that returns 0 or 1
     give a..d, and the recorded tan arguments give chi0 and chi1.
 
@@ -145,15 +149,15 @@ def zenith_luminance_form() -> dict[str, float]:
     from skysh import preetham
 
     def value(t: float, tan: float) -> float:
-        return float(preetham._zenith_luminance(0.0, t, _TanProbe(tan)))
+        return float(preetham.zenith_luminance_unchecked(0.0, t, _TanProbe(tan)))
 
     d = value(0.0, 0.0)
     c = value(1.0, 0.0) - d
     b = value(0.0, 1.0) - d
     a = value(1.0, 1.0) - d - c - b
     probe = _TanProbe(0.0)
-    preetham._zenith_luminance(0.0, 0.0, probe)
-    preetham._zenith_luminance(0.0, 1.0, probe)
+    preetham.zenith_luminance_unchecked(0.0, 0.0, probe)
+    preetham.zenith_luminance_unchecked(0.0, 1.0, probe)
     chi0 = probe.chi[0] / math.pi
     chi1 = probe.chi[1] / math.pi - chi0
     form = {"a": a, "b": b, "c": c, "d": d, "chi0": chi0, "chi1": chi1}
@@ -285,7 +289,7 @@ def page_config(sky: SkySH) -> dict[str, Any]:
     from skysh import engines, preetham, render, sh
     from skysh._version import __version__
 
-    recurrence = sh._recurrence(sky.bands)
+    recurrence = sh.basis_recurrence(sky.bands)
     return {
         "version": __version__,
         "colourspace": sky.colourspace,

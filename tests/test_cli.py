@@ -221,7 +221,8 @@ class TestHelp:
             ([], ["coeffs", "export", "render", "fit", "report", "degrees", "cd/m^2", "status 2"]),
             (["coeffs"], ["degrees, [0, 90]", "[2.5, 6]", "[1, 7]", "cd/m^2*sr", "--normalise", "R, G and B", "[-90, 90]",
                           "ISO8601"]),
-            (["export"], ["radians", "[2.5, 6]", "float32", "double", "[1, 7]"]),
+            (["export"], ["radians", "[2.5, 6]", "float32", "double", "[1, 7]", "skysh_sun_light", "ground_albedo",
+                          "groundAlbedo"]),
             (["render"], ["degrees, [0, 90]", "[2.5, 6]", "[16, 4096]", "azimuth -180"]),
         ],
     )
@@ -400,8 +401,8 @@ class TestSunAndGround:
         from skysh import engines
 
         payload = coeffs_json([*SUN, "--sun", "--ground-albedo", "0.25", "--engine", "threejs"], capsys)
-        radiance = reference(sky, sun=True, ground_albedo=0.25, gibbs=False, dering=True)
-        expected = engines.convert(radiance, "threejs")
+        radiance = reference(sky, sun=True, ground_albedo=0.25, gibbs=False, dering=True, irradiance_table=True)
+        expected = engines.convert(radiance, "threejs")  # 3-band presets: the certified irradiance table
         np.testing.assert_allclose(payload["values"], expected, rtol=0, atol=EXACT * np.abs(expected).max())
 
     def test_sun_light(self, sky: SkySH, capsys: pytest.CaptureFixture) -> None:
@@ -446,12 +447,35 @@ class TestSunAndGround:
         (["--ground-albedo", "1.5"], "--ground-albedo"), (["--ground-albedo", "0.1,0.2"], "--ground-albedo"),
         (["--ground-albedo", "nan"], "--ground-albedo"), (["--ground-albedo", "red"], "--ground-albedo"),
         (["--ground-albedo", "0.1,0.2,-0.3"], "--ground-albedo"), (["--sun-light", "--sun"], "--sun-light"),
-        (["--sun-light", "--engine", "threejs", "--format", "snippet"], "--sun-light"),
+        (["--sun-light", "--format", "snippet"], "--engine"),
     ])
     def test_refusals(self, argv: list[str], needle: str, capsys: pytest.CaptureFixture) -> None:
         code, out, err = run(["coeffs", *SUN, *argv], capsys)
         assert code == 2 and out == "" and err.startswith("skysh: error: ") and err.count("\n") == 1
         assert needle in err
+
+    def test_sun_light_for_an_engine(self, sky: SkySH, capsys: pytest.CaptureFixture) -> None:
+        """--engine adds the engine's light colour and intensity (skysh.engine_sun); --format snippet sets its light."""
+        from skysh import engine_sun
+
+        direction, rgb = sky.sun_light(math.radians(30), 3.0, math.radians(45))
+        payload = coeffs_json([*SUN, "--sun-light", "--engine", "unity"], capsys)
+        preset = engine_sun.sun_preset(direction, rgb, "unity")
+        np.testing.assert_allclose(payload["engine_light_colour"], preset.colour, rtol=EXACT)
+        assert payload["engine_light_intensity"] == pytest.approx(preset.intensity, rel=EXACT)
+        assert payload["engine_light_intensity_unit"].startswith("cd/m^2")
+        code, out, err = run(["coeffs", *SUN, "--sun-light", "--engine", "babylon", "--format", "snippet"], capsys)
+        assert code == 0, err
+        assert out == engine_sun.sun_snippet(direction, rgb, "babylon") + "\n"
+
+    def test_export_carries_the_sun_and_the_ground(self, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+        for fmt, needles in (("c", ("skysh_sun_light(", "const skysh_real *ground_albedo")),
+                             ("glsl", ("bool skysh_sun_light(", "vec3 groundAlbedo")),
+                             ("js", ("export function sunLight(", '"groundAlbedo"'))):
+            out = tmp_path / f"sky.{fmt}"
+            code, _, err = run(["export", "--format", fmt, "--bands", "2", "--out", str(out)], capsys)
+            assert code == 0, err
+            assert all(needle in out.read_text() for needle in needles), fmt
 
     def test_render_with_the_sun_and_the_ground(self, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
         out = tmp_path / "scene.png"

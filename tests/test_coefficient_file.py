@@ -2,14 +2,14 @@
 Tests of :mod:`skysh.coefficient_file`
 ======================================
 
-The format (version 3) and its writer: round trips (identical arrays, the sky's
-and the sun's, metadata as stored), byte-for-byte determinism, members read by
-independent readers (:mod:`zipfile`, :func:`numpy.load`), the content hash
-recomputed here from its documented definition with :mod:`hashlib`, the bounds
-(a file at every bound is accepted), the colourspace list checked against
-colour-science, the ordinary refusals of the reader (versions 1 and 2 by name)
-and the writer, and the named-table scheme: a further table (issue 18's kind)
-added by one :class:`~skysh.coefficient_file.TableSpec`, with no other change.
+The format (version 4) and its writer: round trips (identical arrays, the sky's,
+the sun's and the irradiance's, metadata as stored), byte-for-byte determinism,
+members read by independent readers (:mod:`zipfile`, :func:`numpy.load`), the
+content hash recomputed here from its documented definition with :mod:`hashlib`,
+the bounds (a file at every bound is accepted), the colourspace list checked
+against colour-science, the ordinary refusals of the reader (versions 1 to 3 by
+name) and the writer, and the named-table scheme: a further table added by one
+:class:`~skysh.coefficient_file.TableSpec`, with no other change.
 Hostile and corrupted files are in tests/test_corrupt_file.py.
 
 Files that the package's writer refuses to write are made here with
@@ -33,7 +33,8 @@ from skysh import coefficient_file as cf
 from skysh import poly, sunlight
 from skysh.runtime import SkySH
 
-ENTRIES: tuple[str, ...] = ("format", "format_version", "table", "degrees", "sun_table", "sun_degrees", "metadata")
+ENTRIES: tuple[str, ...] = ("format", "format_version", "table", "degrees", "sun_table", "sun_degrees", "irradiance_table",
+                             "irradiance_degrees", "metadata")
 
 SRGB_FROM_XYZ: list[list[float]] = [[3.2406, -1.5372, -0.4986], [-0.9689, 1.8758, 0.0415], [0.0557, -0.2040, 1.0570]]
 """An XYZ -> RGB matrix for the synthetic tables (IEC 61966-2-1's rounded sRGB; any 3 x 3 within bounds would do)."""
@@ -56,13 +57,31 @@ def _sun(seed: int = 1, degrees: tuple[int, int] = (3, 2)) -> cf.NamedTable:
     return cf.NamedTable(table=table, degrees=np.array([degrees], dtype=np.int64))
 
 
+def _irradiance(seed: int = 2, degrees: tuple[int, int] = (4, 2)) -> cf.NamedTable:
+    table = np.random.default_rng(seed).normal(size=((degrees[0] + 1) * (degrees[1] + 1), 6, 3))
+    return cf.NamedTable(table=table, degrees=np.tile(np.array(degrees, dtype=np.int64), (3, 1)))
+
+
+RECORDED: dict[str, Any] = {"objective": {"method": "blend"}, "margin": 0.001, "fit_error": {"worst": 0.002},
+                            "nonnegativity": {"negative": 0, "points": 12004}}
+"""What the irradiance block must record (any JSON values: the format requires the fields, not their figures)."""
+
+
 def _small_table(bands: int = 3, degrees: tuple[int, int] = (4, 2), seed: int = 0) -> cf.SkyTable:
     rng = np.random.default_rng(seed)
     table = rng.normal(size=((degrees[0] + 1) * (degrees[1] + 1), bands * (bands + 1) // 2, 3))
     metadata = {"colourspace": "sRGB", "errors": {"by_bands": {"1": {"e_mean_worst": 1e-5}}}, "note": "ünïcode ✓",
-                "nested": [1, 2.5, None, True], "tables": {"sun": {"rgb_from_xyz": SRGB_FROM_XYZ, "errors": {"worst": 1e-6}}}}
+                "nested": [1, 2.5, None, True], "tables": {"sun": {"rgb_from_xyz": SRGB_FROM_XYZ, "errors": {"worst": 1e-6}},
+                                                          "irradiance": RECORDED}}
     return cf.SkyTable(table=table, degrees=np.tile(np.array(degrees, dtype=np.int64), (bands, 1)), metadata=metadata,
-                       tables={"sun": _sun()})
+                       tables={"sun": _sun(), "irradiance": _irradiance()})
+
+
+def _irradiance_block(degrees: list[list[int]], colourspace: str = "sRGB") -> dict[str, Any]:
+    """The block write() stores for the irradiance: the format's fixed fields, degrees, colourspace, what was recorded."""
+    fields = {"basis": cf.IRRADIANCE_BASIS, "domain": cf.DOMAIN, "term_order": cf.TERM_ORDER,
+              "units": "cd/m^2 x sr (irradiance; lux for the luminance), linear RGB"}
+    return {**fields, "colourspace": colourspace, "degrees": degrees, **RECORDED}
 
 
 def _sun_block(degrees: list[list[int]], colourspace: str = "sRGB", **extra: Any) -> dict[str, Any]:
@@ -96,8 +115,8 @@ def _rehashed(entries: dict[str, np.ndarray], **metadata_changes: Any) -> dict[s
     """Entries whose metadata is changed and whose hash is then made consistent (a hostile but careful writer)."""
     metadata = json.loads(bytes(entries["metadata"]).decode("ascii"))
     metadata.update(metadata_changes)
-    sun = cf.NamedTable(entries["sun_table"], entries["sun_degrees"])
-    metadata[cf.HASH_KEY] = cf.content_sha256(entries["table"], entries["degrees"], metadata, {"sun": sun})
+    tables = {name: cf.NamedTable(entries[f"{name}_table"], entries[f"{name}_degrees"]) for name in ("sun", "irradiance")}
+    metadata[cf.HASH_KEY] = cf.content_sha256(entries["table"], entries["degrees"], metadata, tables)
     return dict(entries, metadata=np.frombuffer(_canonical(metadata), dtype=np.uint8))
 
 
@@ -110,14 +129,16 @@ class TestRoundTrip:
         np.testing.assert_array_equal(back.table, original.table)
         np.testing.assert_array_equal(back.degrees, original.degrees)
         assert back.table.dtype == np.float64 and back.degrees.dtype == np.int64
-        assert list(back.tables) == ["sun"]
+        assert list(back.tables) == ["sun", "irradiance"]
         np.testing.assert_array_equal(back.tables["sun"].table, original.tables["sun"].table)
         np.testing.assert_array_equal(back.tables["sun"].degrees, [[3, 2]])
         assert back.tables["sun"].max_degrees == (3, 2)
-        # Stored: the caller's metadata plus the runtime fields, the sun's block filled in, and the hash.
+        np.testing.assert_array_equal(back.tables["irradiance"].table, original.tables["irradiance"].table)
+        assert back.tables["irradiance"].degrees.tolist() == [[4, 2]] * 3
+        # Stored: the caller's metadata plus the runtime fields, the blocks filled in, and the hash.
         sun = _sun_block([[3, 2]], rgb_from_xyz=SRGB_FROM_XYZ, errors={"worst": 1e-6})
         added = {"domain": cf.DOMAIN, "basis": cf.BASIS, "term_order": cf.TERM_ORDER, "degrees": [[4, 2]] * 3, "bands": 3,
-                 "tables": {"sun": sun}}
+                 "tables": {"sun": sun, "irradiance": _irradiance_block([[4, 2]] * 3)}}
         assert back.metadata == {**original.metadata, **added, cf.HASH_KEY: back.metadata[cf.HASH_KEY]}
         assert back.bands == 3 and back.max_degrees == (4, 2) and back.colourspace == "sRGB"
         assert list(tmp_path.joinpath("sub").iterdir()) == [path]  # no temporary file left
@@ -131,8 +152,9 @@ class TestRoundTrip:
         degrees = np.array([[1, 0], [3, 2], [2, 1]], dtype=np.int64)
         table = np.zeros((4 * 3, 6, 3))
         table[0, :, :] = 1.0
-        metadata = {"tables": {"sun": {"rgb_from_xyz": SRGB_FROM_XYZ}}}
-        back = cf.read(cf.write(tmp_path / "t.npz", cf.SkyTable(table, degrees, metadata, {"sun": _sun()})))
+        metadata = {"tables": {"sun": {"rgb_from_xyz": SRGB_FROM_XYZ}, "irradiance": RECORDED}}
+        tables = {"sun": _sun(), "irradiance": _irradiance()}
+        back = cf.read(cf.write(tmp_path / "t.npz", cf.SkyTable(table, degrees, metadata, tables)))
         np.testing.assert_array_equal(back.degrees, degrees)
         assert back.max_degrees == (3, 2) and back.colourspace == "sRGB"
 
@@ -146,10 +168,12 @@ class TestRoundTrip:
         with np.load(path, allow_pickle=False) as data:  # no pickles needed
             assert data.files == list(ENTRIES)
             assert str(data["format"]) == cf.FORMAT == "skysh-coefficients"
-            assert data["format_version"].dtype == np.int64 and int(data["format_version"]) == cf.FORMAT_VERSION == 3
+            assert data["format_version"].dtype == np.int64 and int(data["format_version"]) == cf.FORMAT_VERSION == 4
             assert data["table"].dtype == np.float64 and data["table"].shape == (15, 6, 3)
             assert data["sun_table"].dtype == np.float64 and data["sun_table"].shape == (12, 1, 3)
             assert data["sun_degrees"].dtype == np.int64 and data["sun_degrees"].tolist() == [[3, 2]]
+            assert data["irradiance_table"].dtype == np.float64 and data["irradiance_table"].shape == (15, 6, 3)
+            assert data["irradiance_degrees"].dtype == np.int64 and data["irradiance_degrees"].tolist() == [[4, 2]] * 3
             raw = bytes(data["metadata"])
         metadata = json.loads(raw.decode("ascii"))
         assert metadata == cf.read(path).metadata and raw == _canonical(metadata)  # canonical JSON, as documented
@@ -162,7 +186,7 @@ class TestRoundTrip:
 
     def test_content_hash_definition(self, tmp_path: Path) -> None:
         back = cf.read(cf.write(tmp_path / "t.npz", _small_table()))
-        digest = hashlib.sha256(b"skysh-coefficients\n3\n")
+        digest = hashlib.sha256(b"skysh-coefficients\n4\n")
         digest.update(f"table <f8 [15, 6, 3] {15 * 6 * 3 * 8}\n".encode())
         digest.update(back.table.astype("<f8").tobytes())
         digest.update(f"degrees <i8 [3, 2] {3 * 2 * 8}\n".encode())
@@ -171,6 +195,10 @@ class TestRoundTrip:
         digest.update(back.tables["sun"].table.astype("<f8").tobytes())
         digest.update(f"sun_degrees <i8 [1, 2] {2 * 8}\n".encode())
         digest.update(back.tables["sun"].degrees.astype("<i8").tobytes())
+        digest.update(f"irradiance_table <f8 [15, 6, 3] {15 * 6 * 3 * 8}\n".encode())
+        digest.update(back.tables["irradiance"].table.astype("<f8").tobytes())
+        digest.update(f"irradiance_degrees <i8 [3, 2] {3 * 2 * 8}\n".encode())
+        digest.update(back.tables["irradiance"].degrees.astype("<i8").tobytes())
         text = _canonical({k: v for k, v in back.metadata.items() if k != cf.HASH_KEY})
         digest.update(f"metadata {len(text)}\n".encode() + text)
         assert back.metadata[cf.HASH_KEY] == digest.hexdigest()
@@ -181,9 +209,13 @@ class TestRoundTrip:
         assert cf.content_sha256(changed, back.degrees, back.metadata, back.tables) != digest.hexdigest()
         sun = back.tables["sun"].table.copy()
         sun[-1, 0, 2] = np.nextafter(sun[-1, 0, 2], -np.inf)
-        assert cf.content_sha256(back.table, back.degrees, back.metadata,
-                                 {"sun": cf.NamedTable(sun, back.tables["sun"].degrees)}) != digest.hexdigest()
-        assert cf.content_sha256(back.table, back.degrees, back.metadata) != digest.hexdigest()  # without the sun
+        changed_sun = dict(back.tables, sun=cf.NamedTable(sun, back.tables["sun"].degrees))
+        assert cf.content_sha256(back.table, back.degrees, back.metadata, changed_sun) != digest.hexdigest()
+        irradiance = back.tables["irradiance"].table.copy()
+        irradiance[3, 5, 1] = np.nextafter(irradiance[3, 5, 1], np.inf)
+        changed_irradiance = dict(back.tables, irradiance=cf.NamedTable(irradiance, back.tables["irradiance"].degrees))
+        assert cf.content_sha256(back.table, back.degrees, back.metadata, changed_irradiance) != digest.hexdigest()
+        assert cf.content_sha256(back.table, back.degrees, back.metadata) != digest.hexdigest()  # without the tables
         assert cf.content_sha256(back.table, back.degrees, dict(back.metadata, colourspace="ACEScg"),
                                  back.tables) != digest.hexdigest()
 
@@ -195,11 +227,15 @@ class TestRoundTrip:
             back.degrees[0, 0] = 1
         with pytest.raises(ValueError):
             back.tables["sun"].table[0, 0, 0] = 1.0
+        with pytest.raises(ValueError):
+            back.tables["irradiance"].degrees[0, 0] = 1
 
     def test_shipped_file(self, tmp_path: Path) -> None:
         sky = cf.read()
         assert sky.bands == 7 and sky.table.shape == (112, 28, 3) and sky.colourspace == "sRGB"
         assert sky.tables["sun"].table.shape == (91, 1, 3) and sky.tables["sun"].degrees.tolist() == [[12, 6]]
+        assert sky.tables["irradiance"].table.shape == (112, 6, 3)
+        assert sky.tables["irradiance"].degrees.tolist() == [[13, 7]] * 3
         assert cf.read(cf.default_path()).metadata == sky.metadata
         # Rewriting the shipped tables reproduces the shipped file byte for byte.
         assert cf.write(tmp_path / "copy.npz", sky).read_bytes() == cf.default_path().read_bytes()
@@ -218,6 +254,8 @@ class TestBounds:
         assert cf.MAX_MEMBER_BYTES["table.npy"] - 256 == (cf.MAX_FILE_DEGREE + 1) ** 2 * rows * 3 * 8
         assert cf.MAX_MEMBER_BYTES["sun_table.npy"] - 256 == (cf.MAX_FILE_DEGREE + 1) ** 2 * 1 * 3 * 8
         assert cf.MAX_MEMBER_BYTES["sun_degrees.npy"] - 256 == 2 * 8
+        assert cf.MAX_MEMBER_BYTES["irradiance_table.npy"] - 256 == (cf.MAX_FILE_DEGREE + 1) ** 2 * 6 * 3 * 8
+        assert cf.MAX_MEMBER_BYTES["irradiance_degrees.npy"] - 256 == 3 * 2 * 8
         assert cf.MEMBERS == tuple(f"{e}.npy" for e in ENTRIES) == cf.REQUIRED_MEMBERS
         assert cf.MAX_FILE_BYTES < 1 << 20  # "a hostile file costs a few megabytes"
 
@@ -230,14 +268,17 @@ class TestBounds:
         sun = np.full(((top + 1) ** 2, 1, 3), sunlight.SUN_MAX_LN / (top + 1) ** 2)
         sun[::2] *= -1.0
         matrix = [[cf.MAX_MATRIX_ENTRY, -cf.MAX_MATRIX_ENTRY, 0]] * 3
-        metadata = {"colourspace": "ACES2065-1", "padding": "x" * (cf.MAX_METADATA_BYTES - 3000),
-                    "tables": {"sun": {"rgb_from_xyz": matrix}}}
-        tables = {"sun": cf.NamedTable(sun, np.array([[top, top]]))}
+        metadata = {"colourspace": "ACES2065-1", "padding": "x" * (cf.MAX_METADATA_BYTES - 3500),
+                    "tables": {"sun": {"rgb_from_xyz": matrix}, "irradiance": RECORDED}}
+        irradiance = np.random.default_rng(4).uniform(-cf.MAX_TABLE_MAGNITUDE, cf.MAX_TABLE_MAGNITUDE, ((top + 1) ** 2, 6, 3))
+        tables = {"sun": cf.NamedTable(sun, np.array([[top, top]])),
+                  "irradiance": cf.NamedTable(irradiance, np.full((3, 2), top, dtype=np.int64))}
         path = cf.write(tmp_path / "big.npz", cf.SkyTable(table, np.full((bands, 2), top, dtype=np.int64), metadata, tables))
         assert cf.MAX_FILE_BYTES - 4096 < path.stat().st_size <= cf.MAX_FILE_BYTES
         back = cf.read(path)
         np.testing.assert_array_equal(back.table, table)
         np.testing.assert_array_equal(back.tables["sun"].table, sun)
+        np.testing.assert_array_equal(back.tables["irradiance"].table, irradiance)
 
     def test_file_colourspaces_exist_in_colour_science(self) -> None:
         import colour
@@ -268,7 +309,7 @@ class TestRefusals:
         """The members of a version 2 file (no sun table), its metadata without the sun's block."""
         metadata = json.loads(bytes(shipped_entries["metadata"]).decode("ascii"))
         metadata.pop("tables")
-        entries = {k: v for k, v in shipped_entries.items() if not k.startswith("sun_")}
+        entries = {k: v for k, v in shipped_entries.items() if not k.startswith(("sun_", "irradiance_"))}
         return dict(entries, metadata=np.frombuffer(_canonical(metadata), dtype=np.uint8))
 
     def test_version_1_names_the_versions(self, tmp_path: Path, shipped_entries: dict) -> None:
@@ -279,20 +320,31 @@ class TestRefusals:
         entries = dict(entries, format_version=np.array(1, dtype=np.int64), metadata=np.array(json.dumps(metadata)))
         _refused(_write_raw(tmp_path / "v1.npz", entries, compressed=True),
                  r"format version 1 \(skysh 0.1.0: compressed, no content hash\) is no longer read: this skysh \(.*\) "
-                 r"reads format version 3 only.*skysh fit --out")
+                 r"reads format version 4 only.*skysh fit --out")
 
     def test_version_2_names_the_versions(self, tmp_path: Path, shipped_entries: dict) -> None:
         """A version 2 file (five members, hashed, no sun table): refused by its version, not by what it lacks."""
         entries = dict(self._v2_entries(shipped_entries), format_version=np.array(2, dtype=np.int64))
         _refused(_write_raw(tmp_path / "v2.npz", entries),
                  r"format version 2 \(hashed, without the sun's table\) is no longer read: this skysh \(.*\) reads "
-                 r"format version 3 only \(hashed, strictly checked, with the sun's table\); regenerate the file with "
-                 r"`skysh fit --out FILE`")
+                 r"format version 4 only \(hashed, strictly checked, with the sun's and the irradiance tables\); "
+                 r"regenerate the file with `skysh fit --out FILE`")
 
-    @pytest.mark.parametrize("version", [0, 4, -1, 100])
+    def test_version_3_names_the_versions(self, tmp_path: Path, shipped_entries: dict) -> None:
+        """A version 3 file (the sky's and the sun's tables, no irradiance table): refused by its version, by name."""
+        metadata = json.loads(bytes(shipped_entries["metadata"]).decode("ascii"))
+        metadata["tables"].pop("irradiance")
+        entries = {k: v for k, v in shipped_entries.items() if not k.startswith("irradiance_")}
+        entries.update(format_version=np.array(3, dtype=np.int64), metadata=np.frombuffer(_canonical(metadata), np.uint8))
+        _refused(_write_raw(tmp_path / "v3.npz", entries),
+                 r"format version 3 \(without the irradiance table\) is no longer read: this skysh \(.*\) reads format "
+                 r"version 4 only \(hashed, strictly checked, with the sun's and the irradiance tables\); regenerate the "
+                 r"file with `skysh fit --out FILE` \(tools/fit_sky.py\)")
+
+    @pytest.mark.parametrize("version", [0, 5, -1, 100])
     def test_wrong_format_version(self, tmp_path: Path, shipped_entries: dict, version: int) -> None:
         entries = dict(shipped_entries, format_version=np.array(version, dtype=np.int64))
-        _refused(_write_raw(tmp_path / "v.npz", entries), rf"has format version {version}; .* reads format version 3 only")
+        _refused(_write_raw(tmp_path / "v.npz", entries), rf"has format version {version}; .* reads format version 4 only")
 
     @pytest.mark.parametrize("version", [np.array("one"), np.array(1.5), np.array(True)], ids=["string", "fraction", "bool"])
     def test_malformed_format_version(self, tmp_path: Path, shipped_entries: dict, version: np.ndarray) -> None:
@@ -304,7 +356,7 @@ class TestRefusals:
         _refused(_write_raw(tmp_path / "f.npz", entries), rf"has format '{value}', expected 'skysh-coefficients'")
 
     def test_compressed_members(self, tmp_path: Path, shipped_entries: dict) -> None:
-        _refused(_write_raw(tmp_path / "c.npz", shipped_entries, compressed=True), "compressed; format version 3 stores")
+        _refused(_write_raw(tmp_path / "c.npz", shipped_entries, compressed=True), "compressed; format version 4 stores")
 
     def test_same_content_other_writer(self, tmp_path: Path, shipped_entries: dict) -> None:
         """numpy's own writer, the same content: refused by the byte-for-byte comparison."""
@@ -345,9 +397,10 @@ class TestRefusals:
         entries = {k: v for k, v in shipped_entries.items() if k != missing}
         _refused(_write_raw(tmp_path / "m.npz", entries), rf"lacks the members \['{missing}.npy'\]")
 
-    def test_version_3_without_the_sun(self, tmp_path: Path, shipped_entries: dict) -> None:
-        entries = {k: v for k, v in shipped_entries.items() if not k.startswith("sun_")}
-        _refused(_write_raw(tmp_path / "m.npz", entries), r"lacks the members \['sun_table.npy', 'sun_degrees.npy'\]")
+    @pytest.mark.parametrize("table", ["sun", "irradiance"])
+    def test_without_a_required_table(self, tmp_path: Path, shipped_entries: dict, table: str) -> None:
+        entries = {k: v for k, v in shipped_entries.items() if not k.startswith(f"{table}_")}
+        _refused(_write_raw(tmp_path / "m.npz", entries), rf"lacks the members \['{table}_table.npy', '{table}_degrees.npy'\]")
 
     def test_empty_npz(self, tmp_path: Path) -> None:
         _refused(_write_raw(tmp_path / "e.npz", {}), "lacks the members")
@@ -373,16 +426,21 @@ class TestRefusals:
              r"groups <= 1"),
             (lambda e: {"sun_degrees": np.array([[12, 5]])}, r"sun_table must have shape \(78, 1, 3\)"),
             (lambda e: {"sun_degrees": np.array([[32, 6]])}, r"sun_degrees must lie in \[0, 31\]"),
+            (lambda e: {"irradiance_table": e["irradiance_table"][:, :5]}, r"irradiance_table must have shape \(112, 6, 3\)"),
+            (lambda e: {"irradiance_degrees": e["irradiance_degrees"][:2]}, r"irradiance_degrees must have shape \(groups, "
+             r"2\) with 3 <= groups <= 3"),
+            (lambda e: {"irradiance_degrees": np.full((3, 2), [13, 6])}, r"irradiance_table must have shape \(98, 6, 3\)"),
         ],
         ids=["terms", "rows", "channels", "ndim", "bands-vs-rows", "degree-columns", "degrees-1d", "no-bands",
              "too-many-bands", "negative-degree", "degree-too-high", "sun-terms", "sun-2d", "sun-rows", "sun-groups",
-             "sun-degrees-vs-terms", "sun-degree-too-high"],
+             "sun-degrees-vs-terms", "sun-degree-too-high", "irradiance-rows", "irradiance-groups",
+             "irradiance-degrees-vs-terms"],
     )
     def test_inconsistent_shapes(self, tmp_path: Path, shipped_entries: dict, change, match: str) -> None:
         _refused(_write_raw(tmp_path / "s.npz", dict(shipped_entries, **change(shipped_entries))), match)
 
     @pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf])
-    @pytest.mark.parametrize("entry", ["table", "sun_table"])
+    @pytest.mark.parametrize("entry", ["table", "sun_table", "irradiance_table"])
     def test_non_finite_table(self, tmp_path: Path, shipped_entries: dict, value: float, entry: str) -> None:
         table = shipped_entries[entry].copy()
         table[5, 0, 1] = value
@@ -478,7 +536,8 @@ class TestWriteRefusals:
     def test_sun_block_refused(self, tmp_path: Path, block: Any, match: str) -> None:
         good = _small_table()
         with pytest.raises(cf.CoefficientFileError, match=match):
-            cf.write(tmp_path / "x.npz", cf.SkyTable(good.table, good.degrees, {"tables": {"sun": block}}, good.tables))
+            metadata = {"tables": {"sun": block, "irradiance": RECORDED}}
+            cf.write(tmp_path / "x.npz", cf.SkyTable(good.table, good.degrees, metadata, good.tables))
         assert not (tmp_path / "x.npz").exists()
 
     def test_sun_table_refused(self, tmp_path: Path) -> None:
@@ -488,8 +547,15 @@ class TestWriteRefusals:
             meta = good.metadata if metadata is None else metadata
             cf.write(tmp_path / "x.npz", cf.SkyTable(good.table, good.degrees, meta, tables))
 
-        with pytest.raises(cf.CoefficientFileError, match=r"holds the tables \['sun'\]; this SkyTable has none"):
+        with pytest.raises(cf.CoefficientFileError, match=r"holds the tables \['sun', 'irradiance'\]; this SkyTable has none"):
             write({}, {})
+        with pytest.raises(cf.CoefficientFileError, match=r"holds the tables \['irradiance'\]; this SkyTable has none"):
+            write({"sun": _sun()}, {"tables": {"sun": {"rgb_from_xyz": SRGB_FROM_XYZ}}})
+        with pytest.raises(cf.CoefficientFileError, match=r"tables\['irradiance'\] lacks the fields \['objective', 'margin', "
+                           r"'fit_error', 'nonnegativity'\] the format requires"):
+            write(good.tables, {"tables": {"sun": {"rgb_from_xyz": SRGB_FROM_XYZ}}})
+        with pytest.raises(cf.CoefficientFileError, match=r"irradiance_table holds \|value\| 2e\+04, above 10000"):
+            write({"sun": _sun(), "irradiance": cf.NamedTable(np.full((15, 6, 3), 2e4), np.full((3, 2), [4, 2]))})
         with pytest.raises(cf.CoefficientFileError, match=r"sun_table holds \|value\| 101, above 100 \(SUN_MAX_LN\)"):
             write({"sun": cf.NamedTable(np.full((12, 1, 3), 101.0) * (np.arange(12) == 0)[:, None, None], np.array([[3, 2]]))})
         with pytest.raises(cf.CoefficientFileError, match=r"sun_table sums \|values\| to 108 in a channel, above 100"):
@@ -501,7 +567,7 @@ class TestWriteRefusals:
         with pytest.raises(cf.CoefficientFileError, match="tables must be a mapping of names to NamedTable, got list"):
             write([_sun()])
         with pytest.raises(cf.CoefficientFileError, match=r"metadata tables describes \['moon', 'sun'\]; the tables held are "
-                           r"\['sun'\]"):
+                           r"\['irradiance', 'sun'\]"):
             write(good.tables, {"tables": {"sun": {"rgb_from_xyz": SRGB_FROM_XYZ}, "moon": {}}})
         with pytest.raises(cf.CoefficientFileError, match="metadata tables must be a JSON object, got list"):
             write(good.tables, {"tables": []})
@@ -534,62 +600,70 @@ class TestWriteRefusals:
 # --------------------------------------------------------------------------- #
 # The named-table scheme: a further table is one TableSpec
 # --------------------------------------------------------------------------- #
-IRRADIANCE = cf.TableSpec(
-    name="irradiance", required=False, groups=(3, 3),
-    fields={"basis": cf.BASIS, "domain": cf.DOMAIN, "term_order": cf.TERM_ORDER, "units": "test: radiance-equivalent"},
+EXTRA = cf.TableSpec(
+    name="extra", required=False, groups=(2, 2),
+    fields={"basis": cf.BASIS, "domain": cf.DOMAIN, "term_order": cf.TERM_ORDER, "units": "test: radiance"},
     max_magnitude=cf.MAX_TABLE_MAGNITUDE,
 )
-"""A table of issue 18's kind (3 bands of the sky's form), optional, as a test declares it."""
+"""A further table (2 bands of the sky's form), optional, as a test declares it."""
 
 
 @pytest.fixture()
-def with_irradiance(monkeypatch: pytest.MonkeyPatch) -> pytest.MonkeyPatch:
-    """The format with IRRADIANCE added to TABLES and nothing else changed by hand (the layout derived by _layout)."""
-    tables = cf.TABLES + (IRRADIANCE,)
+def with_extra(monkeypatch: pytest.MonkeyPatch) -> pytest.MonkeyPatch:
+    """The format with EXTRA added to TABLES and nothing else changed by hand (the layout derived by _layout)."""
+    tables = cf.TABLES + (EXTRA,)
     layout = cf._layout(tables)
     for name, value in zip(("TABLES", "MEMBERS", "REQUIRED_MEMBERS", "MAX_MEMBER_BYTES", "MAX_FILE_BYTES"), (tables, *layout)):
         monkeypatch.setattr(cf, name, value)
     return monkeypatch
 
 
-def _with_irradiance_table(seed: int = 7) -> cf.SkyTable:
+def _with_extra_table(seed: int = 7) -> cf.SkyTable:
     base = _small_table()
-    irradiance = cf.NamedTable(np.random.default_rng(seed).normal(size=(15, 6, 3)), np.full((3, 2), [4, 2]))
-    return cf.SkyTable(base.table, base.degrees, base.metadata, {**base.tables, "irradiance": irradiance})
+    extra = cf.NamedTable(np.random.default_rng(seed).normal(size=(15, 3, 3)), np.full((2, 2), [4, 2]))
+    return cf.SkyTable(base.table, base.degrees, base.metadata, {**base.tables, "extra": extra})
 
 
 class TestNamedTableScheme:
-    def test_layout(self, with_irradiance: pytest.MonkeyPatch) -> None:
-        assert cf.MEMBERS[-3:] == ("irradiance_table.npy", "irradiance_degrees.npy", "metadata.npy")
-        assert "irradiance_table.npy" not in cf.REQUIRED_MEMBERS and cf.MAX_FILE_BYTES < 1 << 20
+    def test_layout(self, with_extra: pytest.MonkeyPatch) -> None:
+        assert cf.MEMBERS[-3:] == ("extra_table.npy", "extra_degrees.npy", "metadata.npy")
+        assert "extra_table.npy" not in cf.REQUIRED_MEMBERS and cf.MAX_FILE_BYTES < 1 << 20
+        assert {"irradiance_table.npy", "sun_table.npy"} <= set(cf.REQUIRED_MEMBERS)
 
-    def test_round_trip_and_hash(self, tmp_path: Path, with_irradiance: pytest.MonkeyPatch) -> None:
-        path = cf.write(tmp_path / "i.npz", _with_irradiance_table())
+    def test_round_trip_and_hash(self, tmp_path: Path, with_extra: pytest.MonkeyPatch) -> None:
+        path = cf.write(tmp_path / "i.npz", _with_extra_table())
         back = cf.read(path)
-        np.testing.assert_array_equal(back.tables["irradiance"].table, _with_irradiance_table().tables["irradiance"].table)
-        assert back.metadata["tables"]["irradiance"]["units"] == "test: radiance-equivalent"
+        np.testing.assert_array_equal(back.tables["extra"].table, _with_extra_table().tables["extra"].table)
+        assert back.metadata["tables"]["extra"]["units"] == "test: radiance"
         assert cf.write(tmp_path / "again.npz", back).read_bytes() == path.read_bytes()
         with zipfile.ZipFile(path) as archive:
             assert [i.filename for i in archive.infolist()] == list(cf.MEMBERS)
-        irradiance = back.tables["irradiance"]
-        changed = dict(back.tables, irradiance=cf.NamedTable(irradiance.table * 1.0001, irradiance.degrees))
+        extra = back.tables["extra"]
+        changed = dict(back.tables, extra=cf.NamedTable(extra.table * 1.0001, extra.degrees))
         assert cf.content_sha256(back.table, back.degrees, back.metadata, changed) != back.metadata[cf.HASH_KEY]
 
-    def test_optional(self, tmp_path: Path, with_irradiance: pytest.MonkeyPatch) -> None:
+    def test_optional(self, tmp_path: Path, with_extra: pytest.MonkeyPatch) -> None:
         """Files without the optional table (written before it existed) still read."""
-        assert cf.read(cf.default_path()).tables.keys() == {"sun"}
-        with np.load(cf.write(tmp_path / "i.npz", _with_irradiance_table()), allow_pickle=False) as data:
+        assert cf.read(cf.default_path()).tables.keys() == {"sun", "irradiance"}
+        with np.load(cf.write(tmp_path / "i.npz", _with_extra_table()), allow_pickle=False) as data:
             entries = {key: data[key] for key in data.files}
-        half = {k: v for k, v in entries.items() if k != "irradiance_degrees"}
-        _refused(_write_raw(tmp_path / "h.npz", half), r"lacks the members \['irradiance_degrees.npy'\]")
+        half = {k: v for k, v in entries.items() if k != "extra_degrees"}
+        _refused(_write_raw(tmp_path / "h.npz", half), r"lacks the members \['extra_degrees.npy'\]")
 
-    def test_block_checked(self, tmp_path: Path, with_irradiance: pytest.MonkeyPatch) -> None:
-        table = _with_irradiance_table()
-        metadata = {**table.metadata, "tables": {**table.metadata["tables"], "irradiance": {"basis": "monomials"}}}
-        with pytest.raises(cf.CoefficientFileError, match=r"tables\['irradiance'\] basis 'monomials' differs"):
+    def test_block_checked(self, tmp_path: Path, with_extra: pytest.MonkeyPatch) -> None:
+        table = _with_extra_table()
+        metadata = {**table.metadata, "tables": {**table.metadata["tables"], "extra": {"basis": "monomials"}}}
+        with pytest.raises(cf.CoefficientFileError, match=r"tables\['extra'\] basis 'monomials' differs"):
             cf.write(tmp_path / "x.npz", cf.SkyTable(table.table, table.degrees, metadata, table.tables))
 
-    def test_unknown_without_the_spec(self, tmp_path: Path, with_irradiance: pytest.MonkeyPatch) -> None:
-        path = cf.write(tmp_path / "i.npz", _with_irradiance_table())
-        with_irradiance.undo()  # this skysh's format: no such table
-        _refused(path, r"holds 9 members including unexpected ones \['irradiance_degrees.npy', 'irradiance_table.npy'\]")
+    def test_unknown_without_the_spec(self, tmp_path: Path, with_extra: pytest.MonkeyPatch) -> None:
+        path = cf.write(tmp_path / "i.npz", _with_extra_table())
+        with_extra.undo()  # this skysh's format: no such table
+        _refused(path, r"holds 11 members including unexpected ones \['extra_degrees.npy', 'extra_table.npy'\]")
+
+    def test_in_memory_block_of_a_known_table_not_held(self) -> None:
+        """A SkyTable in memory may describe a known table it does not hold (it serves without it); not an unknown one."""
+        good = _small_table()
+        cf.SkyTable(good.table, good.degrees, good.metadata, {"sun": good.tables["sun"]}).validate()
+        with pytest.raises(cf.CoefficientFileError, match=r"metadata tables describes \['irradiance', 'moon', 'sun'\]"):
+            cf.SkyTable(good.table, good.degrees, {"tables": {**good.metadata["tables"], "moon": {}}}, good.tables).validate()

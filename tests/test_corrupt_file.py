@@ -6,11 +6,11 @@ Every file here must be refused by :func:`skysh.coefficient_file.read` with a
 :class:`~skysh.coefficient_file.CoefficientFileError` (nothing else: no
 ``zlib.error``, ``BadZipFile``, ``KeyError``, no hang), each read within
 :data:`MEMORY_BUDGET` of peak allocation (``tracemalloc``, which numpy's
-allocations report to). Kinds (issue 13, extended to format version 3's sun
-table): truncations, bit flips at every 997th byte and at random, hostile
+allocations report to). Kinds (issue 13, extended to format version 4's sun
+and irradiance tables): truncations, bit flips at every 997th byte and at random, hostile
 members (extra, many, repeated, missing, huge declared sizes, 3 GiB declared
-tables, deflate bombs with true and lying sizes), changed numbers in the sky's
-and the sun's tables (x 1.0001, one sign, one ulp, swapped), other dtypes
+tables, deflate bombs with true and lying sizes), changed numbers in the sky's,
+the sun's and the irradiance's tables (x 1.0001, one sign, one ulp, swapped), other dtypes
 (float16, float32, big-endian, Fortran order), metadata changes (with a stale
 hash, and with a recomputed hash: unknown colourspace, other domain, degrees,
 basis; the sun's block: its variables, air-mass range, units, degrees,
@@ -125,24 +125,29 @@ class Content:
         self.degrees = sky.degrees.copy()
         self.sun_table = sky.tables["sun"].table.copy()
         self.sun_degrees = sky.tables["sun"].degrees.copy()
+        self.irradiance_table = sky.tables["irradiance"].table.copy()
+        self.irradiance_degrees = sky.tables["irradiance"].degrees.copy()
         self.metadata = json.loads(json.dumps(sky.metadata))
 
     def members(self, rehash: bool = False, **arrays: np.ndarray) -> dict[str, bytes]:
-        """The seven members (optionally with replaced arrays; the hash recomputed if ``rehash``)."""
+        """The nine members (optionally with replaced arrays; the hash recomputed if ``rehash``)."""
         table, degrees = arrays.get("table", self.table), arrays.get("degrees", self.degrees)
-        sun = cf.NamedTable(arrays.get("sun_table", self.sun_table), arrays.get("sun_degrees", self.sun_degrees))
+        named = {name: cf.NamedTable(arrays.get(f"{name}_table", getattr(self, f"{name}_table")),
+                                     arrays.get(f"{name}_degrees", getattr(self, f"{name}_degrees")))
+                 for name in ("sun", "irradiance")}
         metadata = dict(self.metadata)
         if rehash:
-            metadata[cf.HASH_KEY] = cf.content_sha256(table, degrees, metadata, {"sun": sun})
-        return {
+            metadata[cf.HASH_KEY] = cf.content_sha256(table, degrees, metadata, named)
+        out = {
             "format.npy": _npy(np.array(cf.FORMAT)),
             "format_version.npy": _npy(np.array(cf.FORMAT_VERSION, dtype=np.int64)),
             "table.npy": _npy(table),
             "degrees.npy": _npy(degrees),
-            "sun_table.npy": _npy(sun.table),
-            "sun_degrees.npy": _npy(sun.degrees),
-            "metadata.npy": arrays.get("metadata_bytes", _npy(np.frombuffer(_canonical(metadata), dtype=np.uint8))),
         }
+        for name, values in named.items():
+            out.update({f"{name}_table.npy": _npy(values.table), f"{name}_degrees.npy": _npy(values.degrees)})
+        out["metadata.npy"] = arrays.get("metadata_bytes", _npy(np.frombuffer(_canonical(metadata), dtype=np.uint8)))
+        return out
 
     def with_sun_block(self, **changes: Any) -> dict[str, Any]:
         """The metadata with the sun's block changed (``None`` deletes a field)."""
@@ -269,19 +274,23 @@ class TestTruncationsAndFlips:
 class TestHostileMembers:
     def test_extra_member(self, tmp_path: Path, content: Content, inflations: list[int]) -> None:
         members = [(n, p, STORED, None) for n, p in content.members().items()] + [("extra.npy", _npy(np.zeros(3)), STORED, None)]
-        _refused_bytes(tmp_path, _zip(members), r"holds 8 members including unexpected ones \['extra.npy'\]")
+        _refused_bytes(tmp_path, _zip(members), r"holds 10 members including unexpected ones \['extra.npy'\]")
         assert inflations == []
 
     def test_many_members(self, tmp_path: Path, content: Content) -> None:
         members = [(n, p, STORED, None) for n, p in content.members().items()]
         members += [(f"x{i}.npy", b"", STORED, None) for i in range(3000)]
-        _refused_bytes(tmp_path, _zip(members), "holds 3007 members including unexpected ones")
+        _refused_bytes(tmp_path, _zip(members), "holds 3009 members including unexpected ones")
 
     def test_repeated_member(self, tmp_path: Path, content: Content) -> None:
         members = [(n, p, STORED, None) for n, p in content.members().items()]
-        _refused_bytes(tmp_path, _zip(members + members[2:3]), "holds 8 members")
+        _refused_bytes(tmp_path, _zip(members + members[2:3]), "holds 10 members")
         _refused_bytes(tmp_path, _zip(members[:6] + members[4:5]), r"repeats the members \['sun_table.npy'\]")
         _refused_bytes(tmp_path, _zip(members[:4] + members[6:]), r"lacks the members \['sun_table.npy', 'sun_degrees.npy'\]")
+        _refused_bytes(tmp_path, _zip(members[:7] + members[6:7] + members[8:]),
+                       r"repeats the members \['irradiance_table.npy'\]")
+        _refused_bytes(tmp_path, _zip(members[:6] + members[8:]),
+                       r"lacks the members \['irradiance_table.npy', 'irradiance_degrees.npy'\]")
 
     def test_huge_declared_sizes(self, tmp_path: Path, content: Content, inflations: list[int]) -> None:
         members = content.members()
@@ -343,7 +352,7 @@ class TestHostileMembers:
 
 
 class TestChangedNumbers:
-    @pytest.mark.parametrize("entry", ["table", "sun_table"])
+    @pytest.mark.parametrize("entry", ["table", "sun_table", "irradiance_table"])
     @pytest.mark.parametrize(
         "change",
         [
@@ -379,9 +388,11 @@ class TestChangedNumbers:
     def test_metadata_with_stale_hash(self, tmp_path: Path, content: Content, changes: dict) -> None:
         metadata = dict(content.metadata, **changes)
         raw = _npy(np.frombuffer(_canonical(metadata), dtype=np.uint8))
-        if "colourspace" in changes:  # the sun's block names the colourspace too: refused as inconsistent first
+        if "colourspace" in changes:  # the blocks name the colourspace too: refused as inconsistent first
             _refused_bytes(tmp_path, content.file(metadata_bytes=raw), "colourspace 'sRGB' differs from")
-            metadata = dict(content.with_sun_block(**changes), **changes)  # both changed: only the hash tells
+            metadata = dict(content.with_sun_block(**changes), **changes)
+            blocks = metadata["tables"]
+            metadata["tables"] = {**blocks, "irradiance": {**blocks["irradiance"], **changes}}  # all changed: only the hash
             raw = _npy(np.frombuffer(_canonical(metadata), dtype=np.uint8))
         _refused_bytes(tmp_path, content.file(metadata_bytes=raw), "content hash mismatch")
 
@@ -400,7 +411,7 @@ class TestChangedNumbers:
 
 
 class TestDtypes:
-    @pytest.mark.parametrize("entry", ["table", "sun_table"])
+    @pytest.mark.parametrize("entry", ["table", "sun_table", "irradiance_table"])
     @pytest.mark.parametrize(
         "convert, match",
         [
@@ -416,7 +427,7 @@ class TestDtypes:
         table = convert(getattr(content, entry))
         _refused_bytes(tmp_path, content.file(**{entry: table}), rf"{entry}.npy holds .*{match}|{entry}.npy has .*{match}")
 
-    @pytest.mark.parametrize("entry", ["degrees", "sun_degrees"])
+    @pytest.mark.parametrize("entry", ["degrees", "sun_degrees", "irradiance_degrees"])
     @pytest.mark.parametrize("dtype", [np.int32, np.float64, np.uint64])
     def test_degrees_dtype(self, tmp_path: Path, content: Content, dtype: type, entry: str) -> None:
         _refused_bytes(tmp_path, content.file(**{entry: getattr(content, entry).astype(dtype)}), f"{entry}.npy holds")
@@ -484,8 +495,9 @@ class TestMetadataChanges:
 
     @pytest.mark.parametrize(
         "tables, match",
-        [("sun", "metadata tables must be a JSON object"), ({}, r"metadata tables describes \[\]; the tables held are \['sun'\]"),
-         ("moon", r"metadata tables describes \['moon', 'sun'\]"), ([1], "metadata tables must be a JSON object")],
+        [("sun", "metadata tables must be a JSON object"),
+         ({}, r"metadata tables describes \[\]; the tables held are \['irradiance', 'sun'\]"),
+         ("moon", r"metadata tables describes \['irradiance', 'moon', 'sun'\]"), ([1], "metadata tables must be a JSON object")],
         ids=["string", "empty", "unknown-table", "list"],
     )
     def test_tables_field(self, tmp_path: Path, content: Content, tables: Any, match: str) -> None:
@@ -550,7 +562,7 @@ class TestValues:
         _refused_bytes(tmp_path, content.file(rehash=True, sun_table=table),
                        r"sun_table sums \|values\| to 109 in a channel, above 100 \(SUN_MAX_LN\)")
 
-    @pytest.mark.parametrize("entry", ["table", "sun_table"])
+    @pytest.mark.parametrize("entry", ["table", "sun_table", "irradiance_table"])
     @pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf])
     def test_non_finite(self, tmp_path: Path, content: Content, value: float, entry: str) -> None:
         table = getattr(content, entry).copy()

@@ -12,6 +12,11 @@ takes the fewest sections that still pass through every shared module (section 9
 the process pool, the memoised grids and sweep, the studies; section 10: the
 renders); the run of every section is marked ``slow``.
 
+Sections 11 and 12 also run in process at the quick sizes: their tables and charts, the tabulated
+irradiance within issue 18's bound and never negative (gibbs=True and a scaled projection must exceed it), the
+lune quadrature against closed forms and against the 64-band projection (a wrong sun azimuth must miss), the
+ground exact (a wrong albedo must miss).
+
 In-process: the section registry, the loud failure of a section that raises (no
 "not measured"), the absence of catch-all handlers and of other modules' private
 names in the report's source, and the report's helpers against independent routes.
@@ -19,6 +24,7 @@ names in the report's source, and the report's helpers against independent route
 
 from __future__ import annotations
 
+import functools
 import importlib
 import importlib.util
 import math
@@ -29,12 +35,13 @@ import subprocess
 import sys
 import types
 import zlib
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import ROOT, fibonacci_sphere
 
-ROOT = Path(__file__).resolve().parent.parent
 TOOL = ROOT / "tools" / "error_report.py"
 PACKAGE = ROOT / "tools" / "report"
 
@@ -88,24 +95,66 @@ def tool() -> types.ModuleType:
 @pytest.fixture(scope="module")
 def report(tool: types.ModuleType) -> types.SimpleNamespace:
     """The report's modules, imported after the tool put tools/ on the path."""
-    names = ("run", "common", "fuzz", "studies", "s05_dering", "s08_stability", "s10_pictures")
+    names = ("run", "common", "plans", "fuzz", "studies", "s05_dering", "s08_stability", "s10_pictures",
+             "s11_irradiance_table", "s12_scene_irradiance")
     return types.SimpleNamespace(**{n: importlib.import_module(f"report.{n}") for n in names})
+
+
+def quick_command(name: str, out: Path) -> list[str]:
+    """The command line of the quick run ``name`` (RUNS) writing to ``out``, as a user runs it."""
+    command = [sys.executable, str(TOOL), "--out", str(out), "--quick", "--no-progress"]
+    sections = RUNS[name]
+    return command if sections is None else [*command, "--sections", ",".join(map(str, sections))]
+
+
+def quick_env() -> dict[str, str]:
+    return dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+
+
+@pytest.fixture(scope="module")
+def wiring_run(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[subprocess.Popen, Path]]:
+    """The default quick run, started in the background (see _start_the_wiring_run); killed if left running."""
+    out = tmp_path_factory.mktemp("report_wiring")
+    process = subprocess.Popen(quick_command("wiring", out), cwd=ROOT, env=quick_env(), stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True)
+    yield process, out
+    if process.poll() is None:
+        process.kill()
+        process.communicate()
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _start_the_wiring_run(request: pytest.FixtureRequest) -> None:
+    """Start the default quick run with the module's first test when a selected test reads it: the run then
+    works in its own process while the in-process tests below run, and TestQuickRun (marked ``late``:
+    conftest runs it after the rest of the module) waits for it."""
+    if any(item.module is request.module and "quick" in item.fixturenames and "[wiring]" in item.nodeid
+           for item in request.session.items):
+        request.getfixturevalue("wiring_run")
 
 
 @pytest.fixture(scope="module", params=[pytest.param("wiring"), pytest.param("all", marks=pytest.mark.slow)])
 def quick(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> dict:
-    sections = RUNS[request.param]
-    out = tmp_path_factory.mktemp(f"report_{request.param}")
-    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    command = [sys.executable, str(TOOL), "--out", str(out), "--quick", "--no-progress"]
-    if sections is not None:
-        command += ["--sections", ",".join(map(str, sections))]
-    try:
-        proc = subprocess.run(command, cwd=ROOT, env=env, capture_output=True, text=True, timeout=TIMEOUT_S, check=False)
-    except subprocess.TimeoutExpired:
-        pytest.fail(f"{' '.join(command[1:])} did not finish within {TIMEOUT_S:.0f} s")
+    name = request.param
+    if name == "wiring":
+        process, out = request.getfixturevalue("wiring_run")
+        try:
+            stdout, stderr = process.communicate(timeout=TIMEOUT_S)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.communicate()
+            pytest.fail(f"{' '.join(quick_command(name, out)[1:])} did not finish within {TIMEOUT_S:.0f} s")
+        proc = subprocess.CompletedProcess(process.args, process.returncode, stdout, stderr)
+    else:
+        out = tmp_path_factory.mktemp(f"report_{name}")
+        command = quick_command(name, out)
+        try:
+            proc = subprocess.run(command, cwd=ROOT, env=quick_env(), capture_output=True, text=True, timeout=TIMEOUT_S,
+                                  check=False)
+        except subprocess.TimeoutExpired:
+            pytest.fail(f"{' '.join(command[1:])} did not finish within {TIMEOUT_S:.0f} s")
     report_md = out / "report.md"
-    return {"name": request.param, "sections": sections, "out": out, "proc": proc,
+    return {"name": name, "sections": RUNS[name], "out": out, "proc": proc,
             "text": report_md.read_text(encoding="utf-8") if report_md.exists() else ""}
 
 
@@ -149,6 +198,7 @@ def section_spans(text: str, titles: dict[int, str]) -> list[tuple[int, int, int
 
 
 # --------------------------------------------------------------------------- #
+@pytest.mark.late  # reads the quick run started in the background when the module began
 class TestQuickRun:
     def test_exits_cleanly(self, quick: dict) -> None:
         proc = quick["proc"]
@@ -222,7 +272,7 @@ class TestQuickRun:
 class TestWiring:
     def test_every_section_module_is_registered(self, report: types.SimpleNamespace) -> None:
         sections = report.run.SECTIONS
-        assert list(sections) == list(range(1, 11))
+        assert list(sections) == list(range(1, 13))
         for number, module in sections.items():
             assert module.NUMBER == number and isinstance(module.TITLE, str) and module.TITLE
             assert callable(module.compute) and callable(module.render)
@@ -237,7 +287,7 @@ class TestWiring:
         for number, title in report.run.SECTION_TITLES.items():
             assert f"{number:2d}. {title}" in out
 
-    @pytest.mark.parametrize("argv", [["--sections", "11"], ["--sections", "x"], ["--jobs", "0"]])
+    @pytest.mark.parametrize("argv", [["--sections", "13"], ["--sections", "x"], ["--jobs", "0"]])
     def test_refuses_bad_arguments(self, tool: types.ModuleType, tmp_path: Path, argv: list[str]) -> None:
         with pytest.raises(SystemExit) as info:
             tool.main(["--out", str(tmp_path), *argv])
@@ -377,3 +427,209 @@ class TestHelpers:
             assert {"bands", "gibbs", "irradiance"} <= set(case.kwargs)
         valid = report.fuzz.make_case("in domain", rng)
         assert report.fuzz.expected_outcome(valid) == "finite"
+
+
+# --------------------------------------------------------------------------- #
+# Sections 11 and 12, in process at the quick sizes
+# --------------------------------------------------------------------------- #
+WINDOW_EXACT: float = 1e-15
+"""The continuous window at the table's sizes against the table's rows: the same few operations in another order."""
+
+LUNE_EXACT: float = 1e-12
+"""The lune rule with unit radiance against pi (1 +- n_z) / 2: Gauss rules of 12 nodes per panel integrate the
+integrands (sin^2 t, cos(psi - psi_n): entire functions of small degree on short panels) to rounding."""
+
+BRUTE_VS_SH: float = 1e-4
+"""Brute-force sky irradiance against the 64-band projection's, of the mean irradiance: the 64-band truncation's tail
+is at most 7.2e-5 of the mean (``tools/irradiance_study.py``'s convergence table) and the lune rule converges
+geometrically (32 nodes per panel within 1e-5); a wrong sun azimuth misses by percent (the negative control)."""
+
+GROUND_TOL: float = 2e-4
+"""The runtime's ground against brute force, of the mean irradiance, from 2 bands on: exact in SH; only E_h differs,
+by the sun table's held-out error (<= 1e-4 of E_sun, and E_sun <= 4 x the mean) times albedo / 2 <= 1/2, plus the
+sky table's c_10 fit error (far smaller)."""
+
+WRONG_SCALE: float = 1.1
+"""A deliberately wrong irradiance: the plain projection times 1.1 errs by 10% of the mean or more where the
+irradiance is at least the mean (half the sphere facing the sky), above issue 18's 7% bound."""
+
+LOWEST_SAMPLES: int = 20_000
+"""Fibonacci directions of the sampled minimum that must not fall below the exact minimum (and nearly reaches it)."""
+
+LOWEST_SAMPLED_GAP: float = 1e-3
+"""The sampled minimum over 20,000 directions (spacing about 1.4 degrees) exceeds the exact minimum of a 3-band
+function by at most its curvature times the squared half-spacing: well under 1e-3 of the mean for these skies."""
+
+
+@functools.cache
+def irradiance_64(sun_zenith: float, turbidity: float, sun_azimuth: float) -> np.ndarray:
+    """sh.irradiance of preetham.sky_sh at 64 bands (4,096 coefficients), computed once per sky."""
+    from skysh import preetham, sh
+
+    return sh.irradiance(preetham.sky_sh(sun_zenith, turbidity, 64, sun_azimuth))
+
+
+@pytest.fixture(scope="module")
+def quick_ctx(report: types.SimpleNamespace, tmp_path_factory: pytest.TempPathFactory) -> object:
+    from skysh.runtime import SkySH
+
+    return report.common.Context(plan=report.plans.QUICK, out=tmp_path_factory.mktemp("sections_11_12"), jobs=1,
+                                 progress=False, sky=SkySH.load())
+
+
+@pytest.fixture(scope="module")
+def section_11(report: types.SimpleNamespace, quick_ctx: object,
+               tmp_path_factory: pytest.TempPathFactory) -> tuple[dict, object]:
+    s11 = report.s11_irradiance_table
+    with pytest.MonkeyPatch.context() as patch:  # no dependence on the study's cache in build/
+        patch.setattr(s11, "STUDY_GRID_CACHE", tmp_path_factory.mktemp("no_study_cache"))
+        data = s11.compute(quick_ctx)
+    return data, s11.render(quick_ctx, data)
+
+
+@pytest.fixture(scope="module")
+def section_12(report: types.SimpleNamespace, quick_ctx: object) -> tuple[dict, object]:
+    s12 = report.s12_scene_irradiance
+    data = s12.compute(quick_ctx)
+    return data, s12.render(quick_ctx, data)
+
+
+def section_checks(ctx: object, section: object, png: str, header: str) -> str:
+    """The section's markdown has its heading, a table with ``header`` and its chart, a valid PNG on disk."""
+    text = "\n".join(section.lines)  # type: ignore[attr-defined]
+    assert text.startswith(f"## {section.number}. {section.title}")  # type: ignore[attr-defined]
+    assert f"| {header} |" in text and f"]({png})" in text
+    width, height = check_png(ctx.out / png)  # type: ignore[attr-defined]
+    assert width >= 600 and height >= 300
+    assert "nan" not in text.lower().split()
+    return text
+
+
+class TestIrradianceTableSection:
+    def test_table_chart_and_rows(self, section_11: tuple[dict, object], quick_ctx: object,
+                                  report: types.SimpleNamespace) -> None:
+        data, section = section_11
+        text = section_checks(quick_ctx, section, "s11_irradiance_table.png", "3-band irradiance")
+        study = report.s11_irradiance_table.study
+        for name in data["results"]:
+            assert f"| {name} |" in text
+        assert {study.PLAIN, study.runtime_name(False), study.runtime_name(True)} <= set(data["results"])
+        assert sum(name.startswith("tabulated: ") for name in data["results"]) == 1
+        assert len(data["results"]) == 9  # plain, 2 runtime, continuous, 4 optima, tabulated
+
+    def test_the_tabulated_row_meets_the_bound_and_stays_non_negative(self, section_11: tuple[dict, object],
+                                                                       report: types.SimpleNamespace) -> None:
+        data, _ = section_11
+        tab = data["tabulated"]
+        assert data["results"][tab["name"]]["error"].max() <= report.s11_irradiance_table.THRESHOLD
+        assert tab["negative"] == 0 and tab["minimum"] >= 0.0
+
+    def test_negative_control_gibbs_exceeds_the_bound(self, section_11: tuple[dict, object],
+                                                      report: types.SimpleNamespace) -> None:
+        data, _ = section_11
+        s11 = report.s11_irradiance_table
+        assert data["results"][s11.study.runtime_name(True)]["error"].max() > s11.THRESHOLD
+
+    def test_a_wrong_method_exceeds_the_bound_and_lowest_is_the_minimum(self, report: types.SimpleNamespace) -> None:
+        from skysh import sh
+
+        study = report.s11_irradiance_table.study
+        ev = study.Evaluator(study.sky_points((30.0, 85.0), (3.0,)), None, 12, 16, log=lambda message: None,
+                             truth_nodes=16)
+        plain = ev.truth["coeffs"][:, :9]
+        assert ev.measure(WRONG_SCALE * plain)["error"].min() > report.s11_irradiance_table.THRESHOLD
+        sampled = np.min(np.einsum("mk,skc->smc", sh.basis(fibonacci_sphere(LOWEST_SAMPLES), 3), plain), axis=1)
+        sampled = np.min(sampled / ev.mean, axis=1)
+        lowest = ev.measure(plain)["lowest"]
+        assert np.all(lowest <= sampled) and np.all(sampled - lowest <= LOWEST_SAMPLED_GAP)
+
+    def test_without_the_runtime_table_a_grid_is_solved_and_fitted(self, report: types.SimpleNamespace, quick_ctx: object,
+                                                                   tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+        s11 = report.s11_irradiance_table
+        monkeypatch.setattr(s11, "STUDY_GRID_CACHE", tmp_path)
+        monkeypatch.setattr(s11.study, "runtime_has_irradiance_table", lambda sky: False)
+        data = s11.compute(quick_ctx)
+        tab = data["tabulated"]
+        assert "grid solve in this run" in tab["source"] and tab["name"] in data["results"]
+        assert tab["points"] == s11.SIZES["quick"].nonneg_points + 4 + 4 * s11.SIZES["quick"].nonneg_per_edge
+        assert not list(tmp_path.iterdir())  # the quick run caches nothing
+
+    def test_continuous_window_at_the_table_sizes_is_the_table(self, report: types.SimpleNamespace) -> None:
+        from skysh import dering
+
+        study = report.s11_irradiance_table.study
+        rows = study.continuous_window(np.array(dering.SEED_WINDOW_SIZES))
+        np.testing.assert_allclose(rows, dering.window_table(3), rtol=0.0, atol=WINDOW_EXACT)
+
+    def test_the_runtime_table_is_detected_by_its_option_and_file_table(self, report: types.SimpleNamespace) -> None:
+        study = report.s11_irradiance_table.study
+
+        class Runtime:
+            def __init__(self, tables: dict) -> None:
+                self.table = types.SimpleNamespace(tables=tables)
+
+        class Old(Runtime):
+            def coefficients(self, sun_zenith: float, turbidity: float, bands: int = 3) -> None: ...
+
+        class New(Runtime):
+            def coefficients(self, sun_zenith: float, turbidity: float, irradiance_table: bool | None = None) -> None: ...
+
+        assert not study.runtime_has_irradiance_table(Old({"irradiance": 0}))
+        assert not study.runtime_has_irradiance_table(New({"sun": 0}))
+        assert study.runtime_has_irradiance_table(New({"irradiance": 0}))
+
+
+class TestSceneIrradianceSection:
+    def test_table_and_chart(self, section_12: tuple[dict, object], quick_ctx: object,
+                             report: types.SimpleNamespace) -> None:
+        data, section = section_12
+        s12 = report.s12_scene_irradiance
+        text = section_checks(quick_ctx, section, "s12_scene_irradiance.png", " | ".join(["bands", *s12.PARTS]))
+        for bands in s12.BANDS:
+            assert f"\n| {bands} | " in text
+        assert data["errors"].shape == (len(s12.SIZES["quick"].scenes), len(s12.BANDS), len(s12.PARTS), 2)
+        assert np.all(np.isfinite(data["errors"])) and np.all(data["errors"] >= 0.0)
+        assert "Which part holds the worst error: N = " in text
+
+    def test_more_bands_err_less(self, section_12: tuple[dict, object], report: types.SimpleNamespace) -> None:
+        data, _ = section_12
+        total = report.s12_scene_irradiance.PARTS.index("total")
+        worst = data["errors"][:, :, total, 0]
+        assert np.all(worst[:, -1] < worst[:, 0])  # 7 bands against 1 band, every scene
+
+    @pytest.mark.parametrize("sign", [1.0, -1.0])
+    def test_lune_rule_integrates_unit_radiance(self, report: types.SimpleNamespace, sign: float) -> None:
+        s12 = report.s12_scene_irradiance
+        normals = np.concatenate([fibonacci_sphere(101), [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]]])
+        if sign > 0:
+            got = s12.lune_rule(normals, np.array([0.3, 0.4, math.sqrt(0.75)]), 12)[1].sum(axis=1)
+        else:
+            got = s12.ground_view(normals, 12)
+        np.testing.assert_allclose(got, 0.5 * math.pi * (1.0 + sign * normals[:, 2]), rtol=0.0, atol=LUNE_EXACT)
+
+    @pytest.mark.parametrize(("sun_zenith", "azimuth_error"), [(1.2, 0.0), (1.2, 0.5)])
+    def test_brute_force_sky_against_the_64_band_projection(self, report: types.SimpleNamespace, sun_zenith: float,
+                                                            azimuth_error: float) -> None:
+        from skysh import sh
+
+        s12 = report.s12_scene_irradiance
+        normals = fibonacci_sphere(96)
+        brute = s12.sky_irradiance(normals, sun_zenith, 3.5, s12.SUN_AZIMUTH + azimuth_error, 32)
+        projected = irradiance_64(sun_zenith, 3.5, s12.SUN_AZIMUTH)  # the same sky for both cases
+        values = sh.basis(normals, 64) @ projected
+        error = np.max(np.abs(brute - values) / (projected[0] * 0.5 / math.sqrt(math.pi)))
+        assert (error <= BRUTE_VS_SH) == (azimuth_error == 0.0), f"error {error:.2e} of the mean"
+
+    def test_ground_is_exact_and_a_wrong_albedo_is_caught(self, report: types.SimpleNamespace, quick_ctx: object) -> None:
+        from skysh import sh
+
+        s12 = report.s12_scene_irradiance
+        scene = s12.SIZES["quick"].scenes[1]
+        normals, weights = sh.quadrature_rule(8)
+        truth = s12.scene_truth(scene, normals, 16)
+        ground = s12.PARTS.index("ground")
+        wrong = s12.Scene(scene.sun_zenith_deg, scene.turbidity, tuple(min(1.0, a + 0.05) for a in scene.albedo))
+        for bands in (2, 3, 7):
+            right = s12.errors(s12.runtime_parts(quick_ctx, scene, normals, bands), truth, weights)[ground, 0]
+            off = s12.errors(s12.runtime_parts(quick_ctx, wrong, normals, bands), truth, weights)[ground, 0]
+            assert right <= GROUND_TOL < 100 * GROUND_TOL < off, (bands, right, off)

@@ -9,6 +9,17 @@ evaluated from its own description) matches ``skysh.engines.convert`` of the
 runtime's radiance for every engine and band count, and a negative control (the
 unconverted coefficients) fails the same comparison.
 
+The certified irradiance table (issue 18): the ``irradiance_table`` argument (C
+``SKYSH_BY_INTENT``/0/1, the runtime's None/False/True) at random frames, the domain's
+corners and edges, every (gibbs, irradiance, dering, irradiance_table) setting, against
+the runtime (refused together: -5 and a ``ValueError``), for the 3-band double and float
+headers, the 7-band one (no table) and every engine at 3 bands (by intent the table's
+radiance-equivalent); the exported table's irradiance never negative by its exact minimum
+(:func:`skysh.shmin.exact_min`) at 3,000 random frames and the edges; negative controls:
+a header whose rotation turns the other way, the old pipeline in place of the default,
+the sky's own rows in place of the table (shaders, JSON), and the un-deringed old pipeline
+(it dips below 0). The shaders' and the JSON's tables are evaluated as documented.
+
 Error measure (:func:`dc_relative_error`): the largest |export - runtime| over
 all coefficients of a channel, divided by |DC| of the same channel, worst
 channel, worst point. Relative error per coefficient is meaningless (the m < 0
@@ -34,17 +45,19 @@ import shutil
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 
-from skysh import SkySH, cli, preetham, sh
+from skysh import SkySH, cli, preetham, sh, shmin
 from skysh.export import (
     DEFAULT_FILE_NAMES,
     EXPORT_FORMATS,
     export_source,
     export_tables,
 )
+from skysh.export_lights import BY_INTENT
 
 REQUIRED_TOLERANCE: float = 1e-6
 """The issue's requirement for the C export (relative to the worst channel's DC)."""
@@ -66,10 +79,11 @@ HARNESS: str = r"""
 #include SKYSH_HEADER
 int main(void) {
     double ts, t, phi;
-    int gibbs, dering, irradiance, i, c;
+    int gibbs, dering, irradiance, table, i, c;
     skysh_real out[SKYSH_COUNT][3];
-    while (scanf("%lf %lf %lf %d %d %d", &ts, &t, &phi, &gibbs, &dering, &irradiance) == 6) {
-        int rc = skysh_coefficients((skysh_real)ts, (skysh_real)t, (skysh_real)phi, gibbs, dering, irradiance, out);
+    while (scanf("%lf %lf %lf %d %d %d %d", &ts, &t, &phi, &gibbs, &dering, &irradiance, &table) == 7) {
+        int rc = skysh_coefficients((skysh_real)ts, (skysh_real)t, (skysh_real)phi, gibbs, dering, irradiance, 0, NULL,
+                                    table, out);
         printf("%d", rc);
         for (i = 0; i < SKYSH_COUNT; ++i)
             for (c = 0; c < 3; ++c)
@@ -114,11 +128,20 @@ def dc_relative_error(got: np.ndarray, ref: np.ndarray) -> float:
     return float((np.abs(got - ref).max(axis=-2) / np.abs(ref[..., 0, :])).max())
 
 
+TABLE_CHOICES: dict[int, bool | None] = {BY_INTENT: None, 0: False, 1: True}
+"""The exports' irradiance_table argument -> the runtime's irradiance_table."""
+
+
+def table_of(p: tuple) -> int:
+    """The irradiance_table argument of a point (ts, t, phi, gibbs, irradiance[, dering[, table]]): by intent when absent."""
+    return p[6] if len(p) > 6 else BY_INTENT
+
+
 def runtime_values(sky: SkySH, pts: list, bands: int) -> np.ndarray:
-    """The runtime at points (ts, t, phi, gibbs, irradiance[, dering]) (dering 0 when absent)."""
+    """The runtime at points (ts, t, phi, gibbs, irradiance[, dering[, table]]) (dering 0 when absent)."""
     return np.array([
         sky.coefficients(p[0], p[1], p[2], bands=bands, gibbs=bool(p[3]), dering=bool(p[5:] and p[5]),
-                         irradiance=bool(p[4]))
+                         irradiance=bool(p[4]), irradiance_table=TABLE_CHOICES[table_of(p)])
         for p in pts
     ])
 
@@ -138,7 +161,7 @@ def compile_c(source: str, directory: Path) -> Path:
 
 
 def run_c(binary: Path, pts: list) -> tuple[np.ndarray, np.ndarray]:
-    text = "\n".join(f"{p[0]!r} {p[1]!r} {p[2]!r} {p[3]} {p[5] if p[5:] else 0} {p[4]}" for p in pts) + "\n"
+    text = "\n".join(f"{p[0]!r} {p[1]!r} {p[2]!r} {p[3]} {p[5] if p[5:] else 0} {p[4]} {table_of(p)}" for p in pts) + "\n"
     out = subprocess.run([str(binary)], input=text, capture_output=True, text=True, check=True).stdout.splitlines()
     rows = [np.array(line.split(), dtype=np.float64) for line in out]
     codes = np.array([row[0] for row in rows])
@@ -177,9 +200,9 @@ def evaluate_tables(
     return out * float(preetham.luminance_scale(ts, t))
 
 
-def parse_shader_table(source: str) -> np.ndarray:
-    """The SKYSH_TABLE numbers of a GLSL or HLSL export, (n, 3) float32."""
-    block = source.split("SKYSH_TABLE[", 1)[1].split(";", 1)[0]
+def parse_shader_table(source: str, name: str = "SKYSH_TABLE") -> np.ndarray:
+    """The numbers of a vec3 table (SKYSH_TABLE, SKYSH_IRRADIANCE) of a GLSL or HLSL export, (n, 3) float32."""
+    block = source.split(f" {name}[", 1)[1].split(";", 1)[0]
     triples = re.findall(r"(?:vec3|float3)\(([^()]*)\)", block)
     return np.array([[np.float32(v) for v in triple.split(",")] for triple in triples], dtype=np.float32)
 
@@ -187,7 +210,8 @@ def parse_shader_table(source: str) -> np.ndarray:
 def shader_float32_table_error(sky: SkySH, bands: int, language: str = "glsl") -> float:
     tables = export_tables(sky, bands)
     table32 = parse_shader_table(export_source(sky, language, bands=bands))
-    table = table32.astype(np.float64).reshape(tables.table.shape)
+    rows = tables.table.shape[2] + (bands == 1)  # one band: the unfiltered c_10 follows (not evaluated here)
+    table = table32.astype(np.float64).reshape(tables.table.shape[:2] + (rows, 3))[:, :, : tables.table.shape[2]]
     pts = points()
     got = np.array([
         evaluate_tables(
@@ -269,7 +293,7 @@ class TestCDering:
 
     def test_matches_the_runtime(self, sky: SkySH, tmp_path: Path) -> None:
         binary = compile_c(export_source(sky, "c", bands=3), tmp_path)
-        pts = [(*p, 1) for p in points()]
+        pts = [(*p, 1, 0) for p in points()]  # the old pipeline (irradiance_table 0): its deringing
         codes, got = run_c(binary, pts)
         ref = runtime_values(sky, pts, 3)
         assert np.all(codes == 0)
@@ -280,7 +304,7 @@ class TestCDering:
 
     def test_float_build(self, sky: SkySH, tmp_path: Path) -> None:
         binary = compile_c(export_source(sky, "c", bands=3, real="float"), tmp_path)
-        pts = [(*p, 1) for p in points()]
+        pts = [(*p, 1, 0) for p in points()]
         codes, got = run_c(binary, pts)
         assert np.all(codes == 0)
         assert dc_relative_error(got, runtime_values(sky, pts, 3)) < FLOAT32_TOLERANCE
@@ -305,6 +329,136 @@ class TestCDering:
 
 
 # --------------------------------------------------------------------------- #
+# The certified irradiance table (issue 18): irradiance_table as the runtime's
+# --------------------------------------------------------------------------- #
+TABLE_POINTS: int = 480
+"""Random frames of the table tests: the 24 (gibbs, irradiance, dering, irradiance_table) settings in turn, the
+four corners of the domain with each (96), one in ten of the rest on an edge."""
+
+NONNEGATIVE_POINTS: int = 3000
+"""Random frames at which the exported tabulated irradiance's exact minimum over the sphere is checked (the
+file's certificate: 12,004 points by its own fit tool, tests/test_irradiance_table.py 12,004 others)."""
+
+
+def table_points(count: int = TABLE_POINTS, seed: int = 18) -> list[tuple]:
+    """(ts, t, phi, gibbs, irradiance, dering, irradiance_table) over the domain; see :data:`TABLE_POINTS`."""
+    rng = np.random.default_rng(seed)
+    corners = [(z, t) for z in (0.0, math.pi / 2.0) for t in (2.5, 6.0)]
+    pts = []
+    for k in range(count):
+        setting = (k % 2, (k // 2) % 2, (k // 4) % 2, (BY_INTENT, 0, 1)[(k // 8) % 3])
+        if k < 4 * 24:
+            ts, t = corners[k // 24]
+        else:
+            ts, t = float(rng.uniform(0.0, math.pi / 2.0)), float(rng.uniform(2.5, 6.0))
+            if k % 10 == 0:  # an edge: one variable at an end of its range
+                ts, t = ((0.0, math.pi / 2.0)[k % 20 // 10], t) if k % 40 < 20 else (ts, (2.5, 6.0)[k % 20 // 10])
+        pts.append((ts, t, float(rng.uniform(-20.0, 20.0)), *setting))
+    return pts
+
+
+def table_error(sky: SkySH, binary: Path, pts: list, bands: int) -> tuple[float, int]:
+    """(worst error against the runtime, points both refuse): where the runtime raises a ValueError the export
+    must return -5 with a zeroed output."""
+    codes, got = run_c(binary, pts)
+    worst, refused = 0.0, 0
+    for p, code, values in zip(pts, codes, got):
+        try:
+            ref = runtime_values(sky, [p], bands)[0]
+        except ValueError:
+            assert code == -5 and np.all(values == 0.0), p
+            refused += 1
+            continue
+        assert code == 0, p
+        worst = max(worst, dc_relative_error(values, ref))
+    return worst, refused
+
+
+def relative_minimum(coeffs: np.ndarray) -> np.ndarray:
+    """skysh.shmin.exact_min over the sphere of 3-band irradiance (..., 9, 3), over its mean (Y00 c_0), per channel."""
+    return shmin.exact_min(coeffs) / (coeffs[..., 0, :] / (2.0 * math.sqrt(math.pi)))
+
+
+@pytest.fixture(scope="module")
+def builds(sky: SkySH, tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    """The headers of the table tests, compiled once: 3 bands (double, float), 7 bands (no table)."""
+    if CC is None:
+        pytest.skip("no C compiler on this machine")
+    return {name: compile_c(export_source(sky, "c", bands=bands, real=real), tmp_path_factory.mktemp(f"c{name}"))
+            for name, bands, real in (("3", 3, "double"), ("3f", 3, "float"), ("7", 7, "double"))}
+
+
+@pytest.mark.skipif(CC is None, reason="no C compiler on this machine")
+class TestCIrradianceTable:
+    @pytest.mark.parametrize(("name", "bands", "tolerance"), [("3", 3, DOUBLE_TOLERANCE), ("3f", 3, FLOAT32_TOLERANCE),
+                                                              ("7", 7, DOUBLE_TOLERANCE)])
+    def test_every_setting_matches_the_runtime(self, sky: SkySH, builds: dict[str, Path], name: str, bands: int,
+                                               tolerance: float) -> None:
+        pts = [p for p in table_points() if (name != "3f" or abs(p[2]) < 10.0) and (bands == 3 or not p[5])]  # dering: 3 bands
+        worst, refused = table_error(sky, builds[name], pts, bands)
+        assert worst < tolerance
+        assert refused > 0  # irradiance_table 1 with gibbs (and at 7 bands): refused on both sides
+
+    def test_the_default_takes_the_table(self, sky: SkySH, builds: dict[str, Path]) -> None:
+        """Negative control: 3-band irradiance by intent is not the old pipeline (irradiance_table=False), which
+        misses at every point by far more than the tolerance (measured: 2.3e-3 of the DC at the least)."""
+        pts = [p[:3] + (0, 1, 1, BY_INTENT) for p in table_points()]
+        _, got = run_c(builds["3"], pts)
+        old = runtime_values(sky, [p[:6] + (0,) for p in pts], 3)
+        assert min(dc_relative_error(g[None], r[None]) for g, r in zip(got, old)) > CONTROL_MARGIN * DOUBLE_TOLERANCE
+
+    @pytest.mark.parametrize("name", ["3", "3f"])
+    def test_tabulated_irradiance_is_never_negative(self, builds: dict[str, Path], name: str) -> None:
+        """The exported table's irradiance, exact minimum over the sphere (skysh.shmin.exact_min), at random frames,
+        the corners and the edges; the un-deringed old pipeline at the same frames dips below 0 (the check can fail)."""
+        rng = np.random.default_rng(1802)
+        frames = [(float(z), float(t), float(a)) for z, t, a in zip(rng.uniform(0.0, math.pi / 2.0, NONNEGATIVE_POINTS),
+                                                                 rng.uniform(2.5, 6.0, NONNEGATIVE_POINTS),
+                                                                 rng.uniform(-3.0, 3.0, NONNEGATIVE_POINTS))]
+        frames += [(z, t, 0.5) for z in (0.0, math.pi / 2.0) for t in (2.5, 6.0)]
+        frames += [(z, t, 1.0) for z in np.linspace(0.0, math.pi / 2.0, 25) for t in (2.5, 6.0)]
+        frames += [(z, t, -1.0) for z in (0.0, math.pi / 2.0) for t in np.linspace(2.5, 6.0, 25)]
+        codes, table = run_c(builds[name], [f + (0, 1, 1, BY_INTENT) for f in frames])
+        assert np.all(codes == 0)
+        assert relative_minimum(table).min() >= 0.0
+        _, plain = run_c(builds[name], [f + (0, 1, 0, 0) for f in frames])
+        assert relative_minimum(plain).min() < -1e-3  # measured -2.6e-2 of the mean
+
+    def test_negative_control_wrong_rotation_sign(self, sky: SkySH, tmp_path: Path) -> None:
+        """A header whose rotation (Habel eq. 4) turns the other way must fail the comparison with the runtime."""
+        source = export_source(sky, "c", bands=3)
+        mutated = source.replace("const skysh_real rot = m < 0 ? sin(k * phi)", "const skysh_real rot = m < 0 ? -sin(k * phi)")
+        assert mutated != source
+        pts = [p[:3] + (0, 1, 1, BY_INTENT) for p in table_points(40)]
+        worst, _ = table_error(sky, compile_c(mutated, tmp_path), pts, 3)
+        assert worst > CONTROL_MARGIN * DOUBLE_TOLERANCE
+
+    def test_refusals(self, sky: SkySH, builds: dict[str, Path]) -> None:
+        """-5 (zeroed) for irradiance_table 1 with gibbs, at 7 bands, or a value other than -1, 0, 1."""
+        frame = (0.6, 3.2, 0.7)
+        bad = [frame + (1, 1, 1, 1), frame + (0, 1, 1, 2), frame + (0, 1, 1, -2)]
+        codes, got = run_c(builds["3"], bad)
+        assert np.all(codes == -5) and np.all(got == 0.0)
+        codes, got = run_c(builds["7"], [frame + (0, 1, 0, 1)])
+        assert codes[0] == -5 and np.all(got == 0.0)
+        for bands, gibbs in ((3, True), (7, False)):  # the runtime refuses the same
+            with pytest.raises(ValueError, match="irradiance_table"):
+                sky.coefficients(*frame, bands=bands, gibbs=gibbs, irradiance=True, irradiance_table=True)
+
+    def test_engines_take_the_table_by_intent(self, sky: SkySH, tmp_path: Path) -> None:
+        """skysh_engine_coefficients at 3 bands: engines.convert of the runtime's radiance, the table's
+        radiance-equivalent by intent (no Gibbs filter, deringing on), and with irradiance_table 0 and 1."""
+        cases = [name for name, bands in engine_cases() if bands == 3]
+        pts = [(ts, t, phi, g, 1, choice) for ts, t, phi, g in engine_points()[::3] for choice in (BY_INTENT, 0, 1)
+               if not (g and choice == 1)]
+        for name in cases:
+            codes, got = run_engine_c(export_source(sky, "c", bands=3, engine=name), tmp_path, pts)
+            ref, scale = engine_reference(sky, pts, name, 3)
+            assert np.all(codes == 0) and float(np.abs(got - ref).max()) / scale < DOUBLE_TOLERANCE, name
+        assert sum(engine_table(p, 3) for p in pts) > len(pts) // 3  # the table is in the comparison
+
+
+# --------------------------------------------------------------------------- #
 # Engines: the generated skysh_engine_coefficients() against skysh.engines.convert
 # --------------------------------------------------------------------------- #
 ENGINE_HARNESS: str = r"""
@@ -312,10 +466,11 @@ ENGINE_HARNESS: str = r"""
 #include SKYSH_HEADER
 int main(void) {
     double ts, t, phi;
-    int gibbs, dering, p;
+    int gibbs, dering, table, p;
     skysh_real out[SKYSH_ENGINE_COUNT];
-    while (scanf("%lf %lf %lf %d %d", &ts, &t, &phi, &gibbs, &dering) == 5) {
-        int rc = skysh_engine_coefficients((skysh_real)ts, (skysh_real)t, (skysh_real)phi, gibbs, dering, out);
+    while (scanf("%lf %lf %lf %d %d %d", &ts, &t, &phi, &gibbs, &dering, &table) == 6) {
+        int rc = skysh_engine_coefficients((skysh_real)ts, (skysh_real)t, (skysh_real)phi, gibbs, dering, 0, NULL, table,
+                                           out);
         printf("%d", rc);
         for (p = 0; p < SKYSH_ENGINE_COUNT; ++p)
             printf(" %.17g", (double)out[p]);
@@ -343,13 +498,21 @@ def engine_cases() -> list[tuple[str, int]]:
     return cases
 
 
+def engine_table(p: tuple, bands: int) -> bool:
+    """The runtime's irradiance_table for an engine at (ts, t, phi, gibbs[, dering[, table]]): engines light diffusely,
+    so by intent the table at 3 bands without the Gibbs filter and with deringing (docs/engines.md)."""
+    choice = p[5] if len(p) > 5 else BY_INTENT
+    return bool(choice == 1 or (choice == BY_INTENT and bands == 3 and not p[3] and p[4:] and p[4]))
+
+
 def engine_reference(sky: SkySH, pts: list, name: str, bands: int) -> tuple[np.ndarray, float]:
-    """engines.convert of the runtime's radiance at points (ts, t, phi, gibbs[, dering]), flattened, and the
+    """engines.convert of the runtime's radiance at points (ts, t, phi, gibbs[, dering[, table]]), flattened, and the
     error scale: the largest |DC| times the largest absolute row sum of the engine's map."""
     from skysh import engines
 
     radiance = np.array([
-        sky.coefficients(p[0], p[1], p[2], bands=bands, gibbs=bool(p[3]), dering=bool(p[4:] and p[4])) for p in pts
+        sky.coefficients(p[0], p[1], p[2], bands=bands, gibbs=bool(p[3]), dering=bool(p[4:] and p[4]),
+                         irradiance_table=engine_table(p, bands)) for p in pts
     ])
     ref = np.asarray(engines.convert(radiance, name), dtype=np.float64).reshape(len(pts), -1)
     gain = float(np.abs(np.asarray(engines.engine_map(name, bands).matrix)).sum(axis=1).max())
@@ -383,7 +546,8 @@ def run_engine_c(source: str, directory: Path, pts: list) -> tuple[np.ndarray, n
          "-o", str(binary), str(directory / "harness.c"), "-lm"], capture_output=True, text=True, check=False,
     )
     assert result.returncode == 0, result.stderr
-    text = "\n".join(f"{p[0]!r} {p[1]!r} {p[2]!r} {p[3]} {p[4] if p[4:] else 0}" for p in pts) + "\n"
+    text = "\n".join(f"{p[0]!r} {p[1]!r} {p[2]!r} {p[3]} {p[4] if p[4:] else 0} {p[5] if p[5:] else BY_INTENT}"
+                     for p in pts) + "\n"
     out = subprocess.run([str(binary)], input=text, capture_output=True, text=True, check=True).stdout.splitlines()
     rows = np.array([line.split() for line in out], dtype=np.float64)
     return rows[:, 0], rows[:, 1:]
@@ -492,14 +656,16 @@ class TestEngineOtherLanguages:
             shader.write_text(
                 "#version 330\n" + source + "uniform vec4 params;\nout vec4 colour;\nvoid main() {\n"
                 "    float v[SKYSH_ENGINE_COUNT];\n    bool ok = skysh_engine_coefficients(params.x, params.y, params.z, "
-                "false, params.w > 0.0, v);\n    colour = vec4(v[0], v[SKYSH_ENGINE_COUNT - 1], 0.0, ok ? 1.0 : 0.0);\n}\n"
+                "false, params.w > 0.0, true, vec3(0.2), SKYSH_BY_INTENT, v);\n"
+                "    colour = vec4(v[0], v[SKYSH_ENGINE_COUNT - 1], 0.0, ok ? 1.0 : 0.0);\n}\n"
             )
             command = [GLSLANG, str(shader)]
         else:
             shader = tmp_path / "sky.hlsl"
             shader.write_text(
                 source + "float4 params;\nfloat4 main() : SV_Target {\n    float v[SKYSH_ENGINE_COUNT];\n"
-                "    bool ok = skysh_engine_coefficients(params.x, params.y, params.z, false, params.w > 0.0, v);\n"
+                "    bool ok = skysh_engine_coefficients(params.x, params.y, params.z, false, params.w > 0.0, true,\n"
+                "        float3(0.2, 0.2, 0.2), SKYSH_BY_INTENT, v);\n"
                 "    return float4(v[0], v[SKYSH_ENGINE_COUNT - 1], 0.0, ok ? 1.0 : 0.0);\n}\n"
             )
             command = [GLSLANG, "-D", "-V", "-e", "main", "-S", "frag", "-o", str(tmp_path / "sky.spv"), str(shader)]
@@ -514,8 +680,11 @@ class TestShaderExport:
         source = export_source(sky, language, bands=bands)
         tables = export_tables(sky, bands)
         table = parse_shader_table(source)
-        assert table.shape == (tables.table[..., 0].size, 3)
-        np.testing.assert_array_equal(table, tables.table.reshape(-1, 3).astype(np.float32))  # exact float32 round trip
+        stored = tables.table  # one band: the unfiltered c_10 follows as row 1 (the ground's E_h)
+        if bands == 1:
+            stored = np.concatenate([stored, tables.lights.c10[:, :, None, :]], axis=2)
+        assert table.shape == (stored[..., 0].size, 3)
+        np.testing.assert_array_equal(table, stored.reshape(-1, 3).astype(np.float32))  # exact float32 round trip
         for open_, close in ("()", "{}", "[]"):
             assert source.count(open_) == source.count(close)
         assert f"#define SKYSH_COUNT {bands * bands}" in source
@@ -536,7 +705,8 @@ class TestShaderExport:
         shader.write_text(
             f"#version {version}\n{precision}" + export_source(sky, "glsl", bands=bands)
             + "uniform vec4 params;\nout vec4 colour;\nvoid main() {\n    vec3 c[SKYSH_COUNT];\n"
-            "    bool ok = skysh_coefficients(params.x, params.y, params.z, true, params.w > 0.0, false, c);\n"
+            "    bool ok = skysh_coefficients(params.x, params.y, params.z, true, params.w > 0.0, false, false, vec3(0.0),\n"
+            "        SKYSH_BY_INTENT, c);\n"
             "    colour = vec4(c[0] + c[SKYSH_COUNT - 1], ok ? 1.0 : 0.0);\n}\n"
         )
         result = subprocess.run([GLSLANG, str(shader)], capture_output=True, text=True, check=False)
@@ -549,7 +719,8 @@ class TestShaderExport:
         shader.write_text(
             export_source(sky, "hlsl", bands=bands)
             + "float4 params;\nfloat4 main() : SV_Target {\n    float3 c[SKYSH_COUNT];\n"
-            "    bool ok = skysh_coefficients(params.x, params.y, params.z, true, params.w > 0.0, false, c);\n"
+            "    bool ok = skysh_coefficients(params.x, params.y, params.z, true, params.w > 0.0, false, false,\n"
+            "        float3(0.0, 0.0, 0.0), SKYSH_BY_INTENT, c);\n"
             "    return float4(c[0] + c[SKYSH_COUNT - 1], ok ? 1.0 : 0.0);\n}\n"
         )
         result = subprocess.run(
@@ -557,6 +728,115 @@ class TestShaderExport:
             capture_output=True, text=True, check=False,
         )
         assert result.returncode == 0, result.stdout + result.stderr
+
+
+def evaluate_table(table: np.ndarray, source: Any, p: tuple, irradiance: bool) -> np.ndarray:
+    """3-band coefficients from a table (DX+1, DY+1, 6, 3) as the exports document it (no Gibbs filter); ``source``
+    gives the maps and factors: the JSON payload or :func:`skysh.export.export_tables`' numbers."""
+    if isinstance(source, dict):
+        x_map, y_map = (source["x"]["scale"], source["x"]["shift"]), (source["y"]["scale"], source["y"]["shift"])
+        gibbs, lobe = np.array(source["gibbs"]), np.array(source["lobe"])
+    else:
+        x_map, y_map, gibbs, lobe = (source.x_scale, source.x_shift), (source.y_scale, source.y_shift), source.gibbs, source.lobe
+    return evaluate_tables(table, gibbs, lobe, x_map, y_map, 3, p[0], p[1], math.fmod(p[2], 2.0 * math.pi), False, irradiance)
+
+
+class TestShaderIrradianceTable:
+    """The shaders' SKYSH_IRRADIANCE (float32, evaluated in double as documented) against the runtime's table."""
+
+    @pytest.mark.parametrize("language", ["glsl", "hlsl"])
+    def test_round_trip_and_presence(self, sky: SkySH, language: str) -> None:
+        source = export_source(sky, language, bands=3)
+        table = parse_shader_table(source, "SKYSH_IRRADIANCE")
+        np.testing.assert_array_equal(table, export_tables(sky, 3).irradiance.reshape(-1, 3).astype(np.float32))
+        assert "#define SKYSH_IRRADIANCE_TABLE 1" in source
+        for bands in (1, 7):  # no table: irradianceTable 1 is refused, by intent is the sky's pipeline
+            other = export_source(sky, language, bands=bands)
+            assert "#define SKYSH_IRRADIANCE_TABLE 0" in other and " SKYSH_IRRADIANCE[" not in other
+
+    @pytest.mark.parametrize("language", ["glsl", "hlsl"])
+    def test_float32_table_matches_the_runtime(self, sky: SkySH, language: str) -> None:
+        """Radiance-equivalent and irradiance at the table points; the sky's own rows (SKYSH_TABLE) evaluated the
+        same way miss the runtime's table (negative control)."""
+        source, tables = export_source(sky, language, bands=3), export_tables(sky, 3)
+        shape = tables.irradiance.shape
+        table = parse_shader_table(source, "SKYSH_IRRADIANCE").astype(np.float64).reshape(shape)
+        sky_rows = parse_shader_table(source).astype(np.float64).reshape(shape)
+        worst = control = 0.0
+        for p in table_points()[::4]:
+            ref = sky.coefficients(*p[:3], bands=3, irradiance=bool(p[4]), irradiance_table=True)
+            worst = max(worst, dc_relative_error(evaluate_table(table, tables, p, bool(p[4])), ref))
+            control = max(control, dc_relative_error(evaluate_table(sky_rows, tables, p, bool(p[4])), ref))
+        assert worst < FLOAT32_TABLE_TOLERANCE < CONTROL_MARGIN * FLOAT32_TABLE_TOLERANCE < control
+
+    def test_float32_table_is_never_negative(self, sky: SkySH) -> None:
+        tables = export_tables(sky, 3)
+        table = parse_shader_table(export_source(sky, "glsl", bands=3), "SKYSH_IRRADIANCE").astype(np.float64)
+        rng = np.random.default_rng(1803)
+        got = np.array([evaluate_table(table.reshape(tables.irradiance.shape), tables, (z, t, a), True) for z, t, a in
+                        zip(rng.uniform(0.0, math.pi / 2.0, 1000), rng.uniform(2.5, 6.0, 1000), rng.uniform(-3.0, 3.0, 1000))])
+        assert relative_minimum(got).min() >= 0.0
+
+    @pytest.mark.skipif(GLSLANG is None, reason="glslangValidator not installed (Debian: glslang-tools)")
+    @pytest.mark.parametrize("version", ["330", "300 es", "hlsl"])
+    @pytest.mark.parametrize("engine", [None, "unity"])
+    def test_compiles_with_every_choice(self, sky: SkySH, version: str, engine: str | None, tmp_path: Path) -> None:
+        """irradianceTable from a uniform (every value reaches the code), with and without an engine."""
+        glsl = version != "hlsl"
+        vec3, args = ("vec3", "params.x, params.y, params.z, false, true") if glsl else ("float3", "params.x, params.y, "
+                                                                                           "params.z, false, true")
+        call = (f"skysh_engine_coefficients({args}, false, {vec3}(0.2, 0.2, 0.2), int(params.w) - 1, v)" if engine
+                else f"skysh_coefficients({args}, true, false, {vec3}(0.2, 0.2, 0.2), int(params.w) - 1, c)")
+        decl = "float v[SKYSH_ENGINE_COUNT];" if engine else f"{vec3} c[SKYSH_COUNT];"
+        use = "v[0]" if engine else "c[0].x"
+        source = export_source(sky, "glsl" if glsl else "hlsl", bands=3, engine=engine)
+        if glsl:
+            precision = "precision highp float;\n" if version.endswith("es") else ""
+            shader = tmp_path / "sky.frag"
+            shader.write_text(f"#version {version}\n{precision}{source}uniform vec4 params;\nout vec4 colour;\n"
+                              f"void main() {{\n    {decl}\n    bool ok = {call};\n"
+                              f"    colour = vec4({use}, 0.0, 0.0, ok ? 1.0 : 0.0);\n}}\n")
+            command = [GLSLANG, str(shader)]
+        else:
+            shader = tmp_path / "sky.hlsl"
+            shader.write_text(f"{source}float4 params;\nfloat4 main() : SV_Target {{\n    {decl}\n    bool ok = {call};\n"
+                              f"    return float4({use}, 0.0, 0.0, ok ? 1.0 : 0.0);\n}}\n")
+            command = [GLSLANG, "-D", "-V", "-e", "main", "-S", "frag", "-o", str(tmp_path / "sky.spv"), str(shader)]
+        done = subprocess.run(command, capture_output=True, text=True, check=False)
+        assert done.returncode == 0, done.stdout + done.stderr
+
+
+class TestJsonIrradianceTable:
+    def test_block_matches_the_runtime(self, sky: SkySH) -> None:
+        """The block's table evaluated as its text says (radiance-equivalent and irradiance) against the runtime's
+        irradiance_table=True; the sky's own table in its place misses (negative control)."""
+        payload = json.loads(export_source(sky, "json", bands=3))
+        block = payload["irradiance_table"]
+        assert block["available"] and "by intent" in block["rule"]
+        table, sky_rows = np.array(block["table"]), np.array(payload["table"])
+        worst = control = 0.0
+        for p in table_points()[::5]:
+            ref = sky.coefficients(*p[:3], bands=3, irradiance=bool(p[4]), irradiance_table=True)
+            worst = max(worst, dc_relative_error(evaluate_table(table, payload, p, bool(p[4])), ref))
+            control = max(control, dc_relative_error(evaluate_table(sky_rows, payload, p, bool(p[4])), ref))
+        assert worst < DOUBLE_TOLERANCE < CONTROL_MARGIN * DOUBLE_TOLERANCE < control
+
+    @pytest.mark.parametrize("bands", [1, 7])
+    def test_other_band_counts_have_none(self, sky: SkySH, bands: int) -> None:
+        block = json.loads(export_source(sky, "json", bands=bands))["irradiance_table"]
+        assert not block["available"] and "table" not in block
+
+    @pytest.mark.parametrize("name", [name for name, bands in engine_cases() if bands == 3])
+    def test_engine_plan_on_the_table(self, sky: SkySH, name: str) -> None:
+        """The JSON engine block applied to the table's radiance-equivalent: engines.convert of the runtime's."""
+        payload = json.loads(export_source(sky, "json", bands=3, engine=name))
+        engine, table = payload["engine"], np.array(payload["irradiance_table"]["table"])
+        pts = [p for p in engine_points() if not p[3]][::3]
+        factor = np.array(engine["band_factor"])[sh.band_of_index(3)][:, None]
+        got = [np.array(engine["matrix"]) @ (factor * evaluate_table(table, payload, p, False)).reshape(-1)
+               + np.array(engine["offset"]) for p in pts]
+        ref, scale = engine_reference(sky, [(*p, 1, 1) for p in pts], name, 3)
+        assert float(np.abs(np.array(got) - ref).max()) / scale < DOUBLE_TOLERANCE
 
 
 class TestJsonExport:
@@ -582,9 +862,17 @@ class TestJsonExport:
 class TestExportSource:
     def test_tables_come_from_the_runtime_plan(self, sky: SkySH) -> None:
         tables = export_tables(sky, 3)
-        plan = sky._plans[(3, False)]
+        plan = sky.plan(3, False)
         np.testing.assert_array_equal(tables.table.reshape(plan.half_table.shape), plan.half_table)
         assert tables.degrees == plan.degrees
+        from skysh import runtime  # the variables' maps: the same doubles as the runtime's
+
+        assert (tables.x_scale, tables.x_shift, tables.y_scale, tables.y_shift) == (
+            runtime.X_SCALE, runtime.X_SHIFT, runtime.Y_SCALE, runtime.Y_SHIFT)
+        radiance_equivalent = sky._table_plans[False]  # the runtime's plan of the irradiance table (no lobe)
+        assert tables.degrees == radiance_equivalent.degrees  # the shipped file: the same degrees as the sky's
+        np.testing.assert_array_equal(tables.irradiance.reshape(radiance_equivalent.half_table.shape),
+                                      radiance_equivalent.half_table)
 
     @pytest.mark.parametrize("kwargs", [{"language": "wgsl"}, {"language": "c", "bands": 8},
                                         {"language": "c", "bands": 0}, {"language": "c", "real": "half"}])
@@ -629,6 +917,33 @@ def figures() -> list[dict]:
                     rows.append({"export": f"c ({real})", "bands": bands, "error": c_error(sky, bands, real, Path(directory))})
         rows.append({"export": "glsl/hlsl float32 tables, double arithmetic", "bands": bands,
                      "error": shader_float32_table_error(sky, bands)})
+    return rows + table_figures(sky)
+
+
+def table_figures(sky: SkySH) -> list[dict]:
+    """The irradiance table's figures: every setting of irradiance_table against the runtime (C), the shaders'
+    float32 table in double arithmetic, and the least exact minimum over the mean of the exported table."""
+    import tempfile
+
+    rows = []
+    pts = table_points()
+    if CC is not None:
+        for real in ("double", "float"):
+            with tempfile.TemporaryDirectory() as directory:
+                binary = compile_c(export_source(sky, "c", bands=3, real=real), Path(directory))
+                chosen = [p for p in pts if real == "double" or abs(p[2]) < 10.0]
+                rows.append({"export": f"c ({real}), every irradiance_table setting", "bands": 3, "points": len(chosen),
+                             "error": table_error(sky, binary, chosen, 3)[0]})
+                rng = np.random.default_rng(1802)
+                frames = zip(rng.uniform(0.0, math.pi / 2.0, NONNEGATIVE_POINTS), rng.uniform(2.5, 6.0, NONNEGATIVE_POINTS))
+                _, table = run_c(binary, [(float(z), float(t), 0.3, 0, 1, 1, BY_INTENT) for z, t in frames])
+                rows.append({"export": f"c ({real}) tabulated irradiance", "measure": "least exact minimum / mean",
+                             "points": NONNEGATIVE_POINTS, "value": float(relative_minimum(table).min())})
+    tables = export_tables(sky, 3)
+    table = parse_shader_table(export_source(sky, "glsl", bands=3), "SKYSH_IRRADIANCE").astype(np.float64)
+    worst = max(dc_relative_error(evaluate_table(table.reshape(tables.irradiance.shape), tables, p, bool(p[4])),
+                                  sky.coefficients(*p[:3], irradiance=bool(p[4]), irradiance_table=True)) for p in pts)
+    rows.append({"export": "glsl/hlsl float32 irradiance table, double arithmetic", "bands": 3, "error": worst})
     return rows
 
 

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_dering import L_OF, light, random_functions, sky_samples
+from conftest import L_OF, light, random_functions, sky_samples
 
 from skysh import dering, export_dering, sh
 

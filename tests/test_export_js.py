@@ -11,6 +11,13 @@ result over |DC| of the same channel, worst channel. For engines the scale is
 the largest |DC| of the radiance times the largest absolute row sum of the
 engine's map (the most a DC-sized input can become in the engine's numbers).
 
+The certified irradiance table (issue 18): the ``irradianceTable`` option against the
+runtime's ``irradiance_table`` (every option absent or set, engines, the sun and the
+ground, the domain's corners and edges; refusals on both sides), the module's tabulated
+irradiance never negative by its exact minimum (:func:`skysh.shmin.exact_min`), and
+negative controls (a module whose rotation turns the other way; the old pipeline in
+place of the default; the un-deringed old pipeline dips below 0).
+
 Skipped without node; the engine tests are skipped while ``skysh.engines`` does
 not exist. ``python tests/test_export_js.py`` prints the measured errors.
 """
@@ -29,7 +36,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from skysh import SkySH
+from skysh import SkySH, sh, shmin
 from skysh.export import export_source
 from skysh.export_js import declarations, declarations_path, module_source
 
@@ -61,6 +68,10 @@ const results = request.calls.map((call) => {
   try {
     const args = call.map((v) => (v !== null && typeof v === "object" && !("$float" in v)
       ? Object.fromEntries(Object.entries(v).map(([k, x]) => [k, decode(x)])) : decode(v)));
+    if (args[0] === "sunLight") {
+      const light = m.sunLight(...args.slice(1));
+      return { values: [...light.direction, ...light.rgb], plain: true };
+    }
     const out = m.coefficients(...args);
     return { values: Array.from(out), plain: Array.isArray(out) };
   } catch (error) {
@@ -130,14 +141,27 @@ def random_calls(count: int, seed: int = SEED) -> list[tuple[float, float, float
     return calls
 
 
+def runtime_options(options: dict[str, Any]) -> dict[str, Any]:
+    """The runtime's keyword arguments for a module call's options (the radiance for an engine), the module's
+    documented defaults written out: absent gibbs and dering are the runtime's None (its rule by intent) except
+    where the module differs: an engine lights diffusely (gibbs false, dering where carried, and the irradiance
+    table by the irradiance rule), and a module without deringing at a band count has none (dering false)."""
+    bands = options.get("bands", 3)
+    gibbs, dering, table = options.get("gibbs"), options.get("dering"), options.get("irradianceTable")
+    if "engine" in options:
+        if table is None:  # the runtime's rule for irradiance, as engines light diffusely
+            table = bands == 3 and gibbs is not True and dering is not False
+        gibbs = False if gibbs is None else gibbs
+        dering = bands == 3 if dering is None else dering
+    elif dering is None and bands != 3:
+        dering = False  # the module derings 3 bands only (its DERING_BANDS)
+    return dict(bands=bands, gibbs=gibbs, dering=dering, irradiance=options.get("irradiance", False),
+                sun=options.get("sun", False), ground_albedo=options.get("groundAlbedo", 0.0), irradiance_table=table)
+
+
 def python_reference(sky: SkySH, ts: float, t: float, phi: float, options: dict[str, Any]) -> np.ndarray:
-    """The runtime's result for the same options; the documented JS defaults written out:
-    gibbs = !irradiance (the intent), dering as given."""
-    irradiance = options.get("irradiance", False)
-    gibbs = options.get("gibbs", not irradiance)
-    return sky.coefficients(
-        ts, t, phi, bands=options["bands"], gibbs=gibbs, dering=options["dering"], irradiance=irradiance
-    )
+    """The runtime's result for the same options (:func:`runtime_options`; for an engine, its radiance)."""
+    return sky.coefficients(ts, t, phi, **runtime_options(options))
 
 
 # --------------------------------------------------------------------------- #
@@ -191,7 +215,7 @@ class TestAgainstRuntime:
         assert values[2] == values[3]
         got = np.array(values[0]).reshape(-1, 3)
         assert dc_relative_error(got, sky.coefficients(0.4, 4.0)) < JS_TOLERANCE
-        if carried:
+        if carried:  # the runtime's default for 3-band irradiance: the certified table
             got = np.array(values[2]).reshape(-1, 3)
             assert dc_relative_error(got, sky.coefficients(0.4, 4.0, irradiance=True)) < JS_TOLERANCE
 
@@ -222,7 +246,7 @@ class TestDering:
         rng = np.random.default_rng(SEED + 3)
         calls = [
             [float(rng.uniform(0.0, math.pi / 2.0)), float(rng.uniform(2.5, 6.0)), float(rng.uniform(-9.0, 9.0)),
-             {"bands": 3, "dering": True, "gibbs": k % 2 == 0, "irradiance": k % 4 < 2}]
+             {"bands": 3, "dering": True, "gibbs": k % 2 == 0, "irradiance": k % 4 < 2, "irradianceTable": False}]
             for k in range(DERING_INPUTS)
         ]
         reply = run_node(module_dir, calls)
@@ -237,15 +261,133 @@ class TestDering:
         assert windowed > DERING_INPUTS // 10  # the comparison covers real windows, not only identities
 
     def test_dering_with_engines(self, sky: SkySH, module_dir: Path) -> None:
+        """The engine option's defaults at 3 bands (by intent: the irradiance table's radiance-equivalent) and the
+        deringed old pipeline one option away."""
         engines = pytest.importorskip("skysh.engines")
         names = [name for name, bands in engine_cases() if bands == 3]
-        calls = [[0.2 + 0.1 * k, 2.5 + 0.3 * k, 1.0 - k, {"engine": name, "bands": 3}] for name in names for k in range(8)]
+        calls = [[0.2 + 0.1 * k, 2.5 + 0.3 * k, 1.0 - k, {"engine": name, "bands": 3, **({"irradianceTable": False} if k % 2
+                                                                                            else {})}]
+                 for name in names for k in range(8)]
         reply = run_node(module_dir, calls)
         for (ts, t, phi, options), result in zip(calls, reply["results"]):
-            radiance = sky.coefficients(ts, t, phi, bands=3, gibbs=False, dering=True)  # the engine defaults
+            table = "irradianceTable" not in options
+            radiance = sky.coefficients(ts, t, phi, bands=3, gibbs=False, dering=True, irradiance_table=table)
             ref = np.asarray(engines.convert(radiance, options["engine"]), dtype=np.float64).reshape(-1)
             gain = float(np.abs(np.asarray(engines.engine_map(options["engine"], 3).matrix)).sum(axis=1).max())
             assert np.abs(np.array(result["values"]) - ref).max() / (gain * np.abs(radiance[0]).max()) < JS_TOLERANCE
+
+
+TABLE_INPUTS: int = 600
+"""Random calls of the irradiance-table tests: every option absent or set, engines at 3 bands."""
+
+NONNEGATIVE_INPUTS: int = 2000
+"""Random frames (and the domain's corners and edges) at which the module's tabulated irradiance is checked by its
+exact minimum over the sphere."""
+
+
+def table_calls(count: int = TABLE_INPUTS, seed: int = SEED + 18) -> list[tuple[float, float, float, dict[str, Any]]]:
+    """Random calls: bands 3 two times in three (else 1-7), gibbs/dering/irradiance absent, true or false (dering
+    true at 3 bands only, where the module carries it), irradianceTable absent, null, true or false, an engine every
+    fifth 3-band call, the sun and a ground now and then; the domain's corners first, one in ten on an edge."""
+    rng = np.random.default_rng(seed)
+    names = [name for name, bands in engine_cases() if bands == 3]
+    corners = [(z, t) for z in (0.0, math.pi / 2.0) for t in (2.5, 6.0)]
+    calls = []
+    for k in range(count):
+        bands = 3 if k % 3 else int(rng.integers(1, 8))
+        options: dict[str, Any] = {"bands": bands}
+        for key, values, pick in (("gibbs", (True, False), k // 3), ("dering", (True, False), k // 9),
+                                  ("irradiance", (True, False), k // 27), ("irradianceTable", (None, True, False), k // 81)):
+            choice = pick % (len(values) + 1)
+            if choice < len(values) and not (key == "dering" and values[choice] and bands != 3):
+                options[key] = values[choice]
+        if names and bands == 3 and k % 5 == 0 and not options.get("irradiance"):
+            options["engine"] = names[k // 5 % len(names)]
+        if k % 7 == 0:
+            options.update(sun=True, groundAlbedo=0.3)
+        ts, t = corners[k % 4] if k < 40 else (float(rng.uniform(0.0, math.pi / 2.0)), float(rng.uniform(2.5, 6.0)))
+        if k >= 40 and k % 10 == 0:
+            ts = (0.0, math.pi / 2.0)[k % 20 // 10]
+        calls.append((ts, t, float(rng.uniform(-20.0, 20.0)), options))
+    return calls
+
+
+def table_errors(sky: SkySH, calls: list, results: list) -> tuple[float, int, int]:
+    """(worst error against the runtime, calls both refuse, calls that take the table); a ValueError of the runtime
+    must be a RangeError of the module naming irradianceTable."""
+    worst, refused, tables = 0.0, 0, 0
+    for (ts, t, phi, options), result in zip(calls, results):
+        try:
+            ref, scale = light_reference(sky, ts, t, phi, options)
+        except ValueError:
+            assert result.get("error") == "RangeError" and result["message"].startswith("irradianceTable"), (options, result)
+            refused += 1
+            continue
+        assert "values" in result, (options, result)
+        got = np.array(result["values"])
+        error = float(np.abs(got - ref.reshape(-1)).max()) / scale if scale else dc_relative_error(got.reshape(-1, 3), ref)
+        worst = max(worst, error)
+        kwargs = runtime_options(options)
+        if kwargs["bands"] == 3 and kwargs["gibbs"] is not True and kwargs["irradiance_table"] is not False:
+            tables += np.array_equal(sky.coefficients(ts, t, phi, **kwargs),
+                                     sky.coefficients(ts, t, phi, **{**kwargs, "irradiance_table": True}))
+    return worst, refused, tables
+
+
+class TestIrradianceTable:
+    """The certified irradiance table (issue 18): the irradianceTable option as the runtime's irradiance_table."""
+
+    def test_every_setting_matches_the_runtime(self, sky: SkySH, module_dir: Path) -> None:
+        calls = table_calls()
+        worst, refused, tables = table_errors(sky, calls, run_node(module_dir, [list(c) for c in calls])["results"])
+        assert worst < JS_TOLERANCE
+        assert refused > 10 and tables > TABLE_INPUTS // 10  # refusals and the table are in the comparison
+
+    def test_the_default_takes_the_table(self, sky: SkySH, module_dir: Path) -> None:
+        """Negative control: the default 3-band irradiance misses the old pipeline (irradiance_table=False)."""
+        calls = [c[:3] + ({"irradiance": True},) for c in table_calls(60)]
+        reply = run_node(module_dir, [list(c) for c in calls])
+        for (ts, t, phi, _), result in zip(calls, reply["results"]):
+            old = sky.coefficients(ts, t, phi, irradiance=True, irradiance_table=False)
+            assert dc_relative_error(np.array(result["values"]).reshape(-1, 3), old) > CONTROL_MARGIN * JS_TOLERANCE
+
+    def test_tabulated_irradiance_is_never_negative(self, module_dir: Path) -> None:
+        """The module's default 3-band irradiance, exact minimum over the sphere (skysh.shmin.exact_min), at random
+        frames, the corners and the edges; with irradianceTable: false and dering: false it dips below 0."""
+        rng = np.random.default_rng(SEED + 19)
+        frames = [[float(z), float(t), float(a)] for z, t, a in zip(rng.uniform(0.0, math.pi / 2.0, NONNEGATIVE_INPUTS),
+                                                                 rng.uniform(2.5, 6.0, NONNEGATIVE_INPUTS),
+                                                                 rng.uniform(-3.0, 3.0, NONNEGATIVE_INPUTS))]
+        frames += [[z, t, 0.5] for z in (0.0, math.pi / 2.0) for t in (2.5, 6.0)]
+        frames += [[z, t, 1.0] for z in np.linspace(0.0, math.pi / 2.0, 25).tolist() for t in (2.5, 6.0)]
+        frames += [[z, t, -1.0] for z in (0.0, math.pi / 2.0) for t in np.linspace(2.5, 6.0, 25).tolist()]
+        plain = {"irradiance": True, "irradianceTable": False, "dering": False}
+        reply = run_node(module_dir, [f + [{"irradiance": True}] for f in frames] + [f + [plain] for f in frames])
+        values = np.array([r["values"] for r in reply["results"]]).reshape(2, len(frames), 9, 3)
+        mean = values[:, :, 0, :] / (2.0 * math.sqrt(math.pi))
+        lowest = (shmin.exact_min(values) / mean).min(axis=(1, 2))
+        assert lowest[0] >= 0.0 and lowest[1] < -1e-3  # measured 6.8e-4 and -2.6e-2 of the mean
+
+    def test_negative_control_wrong_rotation_sign(self, sky: SkySH, module_dir: Path) -> None:
+        """A module whose rotation (Habel eq. 4) turns the other way must fail the comparison with the runtime."""
+        source = (module_dir / "sky_sh.mjs").read_text()
+        mutated = source.replace("sp = SIN[k] * band;", "sp = -SIN[k] * band;")
+        assert mutated != source
+        (module_dir / "turned.mjs").write_text(mutated)
+        calls = [c[:3] + ({"irradiance": True},) for c in table_calls(20)]
+        worst, _, tables = table_errors(sky, calls, run_node(module_dir, [list(c) for c in calls], "turned.mjs")["results"])
+        assert tables == len(calls) and worst > CONTROL_MARGIN * JS_TOLERANCE
+
+    def test_a_module_without_the_table(self, sky: SkySH, tmp_path: Path) -> None:
+        """Two bands: no table; irradianceTable: true is refused, the default irradiance is the runtime's (no table)."""
+        (tmp_path / "two.mjs").write_text(module_source(sky, bands=2))
+        (tmp_path / "runner.mjs").write_text(RUNNER)
+        reply = run_node(tmp_path, [[0.5, 3.0, 0.2, {"bands": 2, "irradianceTable": True}],
+                                    [0.5, 3.0, 0.2, {"bands": 2, "irradiance": True}]], module="two.mjs")
+        assert reply["results"][0]["error"] == "RangeError"
+        assert reply["results"][0]["message"].startswith("irradianceTable: true needs the coefficient file's")
+        got = np.array(reply["results"][1]["values"]).reshape(-1, 3)
+        assert dc_relative_error(got, sky.coefficients(0.5, 3.0, 0.2, bands=2, irradiance=True, dering=False)) < JS_TOLERANCE
 
 
 def dering_bands(module_dir: Path) -> list[int]:
@@ -281,6 +423,9 @@ BAD_CALLS: list[tuple[list[Any], str, str]] = [
     ([0.5, 3.0, 0.0, {"dering": 0}], "TypeError", "dering"),
     ([0.5, 3.0, 0.0, {"gibs": True}], "TypeError", "gibs"),
     ([0.5, 3.0, 0.0, 7], "TypeError", "options"),
+    ([0.5, 3.0, 0.0, {"irradianceTable": 1}], "TypeError", "irradianceTable"),
+    ([0.5, 3.0, 0.0, {"irradianceTable": True, "bands": 2}], "RangeError", "irradianceTable"),
+    ([0.5, 3.0, 0.0, {"irradianceTable": True, "gibbs": True}], "RangeError", "irradianceTable"),
 ]
 
 
@@ -407,6 +552,115 @@ class TestEngines:
 
 
 # --------------------------------------------------------------------------- #
+# The sun and the ground (skysh.export_lights)
+# --------------------------------------------------------------------------- #
+LIGHT_INPUTS: int = 350
+"""Random calls with the sun and the ground: every band count, flag and (for 3 bands) engine, the horizon every
+tenth call."""
+
+NONNEGATIVE_FLOOR: float = -1e-9
+"""Sun + dering: irradiance over the sphere above this times its DC (rounding of a sum touching 0)."""
+
+
+def light_calls(count: int, seed: int = SEED + 11) -> list[tuple[float, float, float, dict[str, Any]]]:
+    rng = np.random.default_rng(seed)
+    names = [name for name, bands in engine_cases() if bands == 3]
+    calls = []
+    for k in range(count):
+        bands = 1 + k % 7
+        options: dict[str, Any] = {"bands": bands, "gibbs": (k // 7) % 2 == 0, "irradiance": (k // 14) % 2 == 0,
+                                   "dering": bands == 3 and (k // 28) % 2 == 0, "sun": (k // 3) % 2 == 0 or k % 10 == 0}
+        if k % 4:
+            options["groundAlbedo"] = [float(v) for v in rng.uniform(0.0, 1.0, 3)] if k % 4 > 1 else 0.25
+        if bands == 3 and names and k % 5 == 0:
+            options.update(engine=names[k % len(names)], irradiance=False)
+        ts = math.pi / 2.0 if k % 10 == 0 else float(rng.uniform(0.0, math.pi / 2.0))
+        calls.append((ts, float(rng.uniform(2.5, 6.0)), float(rng.uniform(-30.0, 30.0)), options))
+    return calls
+
+
+def light_reference(sky: SkySH, ts: float, t: float, phi: float, options: dict[str, Any]) -> tuple[np.ndarray, float]:
+    """The runtime's numbers for a call (engines: convert of the radiance) and the error scale (|DC| per channel,
+    or the engine's gain times the largest |DC|)."""
+    radiance = python_reference(sky, ts, t, phi, options)
+    if "engine" not in options:
+        return radiance, 0.0
+    from skysh import engines
+
+    gain = float(np.abs(np.asarray(engines.engine_map(options["engine"], 3).matrix)).sum(axis=1).max())
+    return np.asarray(engines.convert(radiance, options["engine"])).reshape(-1), gain * float(np.abs(radiance[0]).max())
+
+
+def light_error(sky: SkySH, calls: list, results: list) -> float:
+    worst = 0.0
+    for (ts, t, phi, options), result in zip(calls, results):
+        assert "values" in result, (options, result)
+        ref, scale = light_reference(sky, ts, t, phi, options)
+        got = np.array(result["values"])
+        error = float(np.abs(got - ref.reshape(-1)).max()) / scale if scale else dc_relative_error(got.reshape(-1, 3), ref)
+        worst = max(worst, error)
+    return worst
+
+
+class TestLights:
+    def test_random_inputs_match_the_python_runtime(self, sky: SkySH, module_dir: Path) -> None:
+        calls = light_calls(LIGHT_INPUTS)
+        assert light_error(sky, calls, run_node(module_dir, [list(c) for c in calls])["results"]) < JS_TOLERANCE
+
+    def test_sun_light_matches_the_runtime(self, sky: SkySH, module_dir: Path) -> None:
+        rng = np.random.default_rng(SEED + 12)
+        frames = [(float(ts), float(t), float(phi)) for ts, t, phi in
+                  zip(rng.uniform(0.0, math.pi / 2.0, 60), rng.uniform(2.5, 6.0, 60), rng.uniform(-99.0, 99.0, 60))]
+        frames += [(math.pi / 2.0, 6.0, 1.0), (0.0, 2.5, 0.0), (math.pi / 2.0, 2.5, -4.0)]
+        reply = run_node(module_dir, [["sunLight", *f] for f in frames])
+        for frame, result in zip(frames, reply["results"]):
+            direction, rgb = sky.sun_light(*frame)
+            values = np.array(result["values"])
+            assert np.abs(values[:3] - direction).max() < JS_TOLERANCE
+            assert np.abs(values[3:] - rgb).max() / np.abs(rgb).max() < JS_TOLERANCE
+
+    def test_sun_and_dering_keep_the_irradiance_non_negative(self, module_dir: Path) -> None:
+        calls = [[float(ts), 2.5 + 0.08 * k, 0.3 * k, {"bands": 3, "irradiance": True, "sun": True,
+                                                      "groundAlbedo": [0.3, 0.2, 0.1] if k % 2 else 0}]
+                 for k, ts in enumerate(np.linspace(0.0, math.pi / 2.0, 40))]  # black ground: the sky's ring shows
+        normals = np.random.default_rng(4).standard_normal((4000, 3))
+        basis = sh.basis(normals / np.linalg.norm(normals, axis=1, keepdims=True), 3)
+        for call, result in zip(calls, run_node(module_dir, calls)["results"]):
+            coefficients = np.array(result["values"]).reshape(-1, 3)
+            assert (basis @ coefficients).min() >= NONNEGATIVE_FLOOR * coefficients[0].max(), call
+
+    @pytest.mark.parametrize(("options", "kind", "name"), [
+        ({"groundAlbedo": -0.1}, "RangeError", "groundAlbedo"),
+        ({"groundAlbedo": [0.1, 1.5, 0.1]}, "RangeError", "groundAlbedo"),
+        ({"groundAlbedo": float("nan")}, "RangeError", "groundAlbedo"),
+        ({"groundAlbedo": [0.2, 0.2]}, "TypeError", "groundAlbedo"),
+        ({"groundAlbedo": "0.2"}, "TypeError", "groundAlbedo"), ({"sun": 1}, "TypeError", "sun"),
+    ])
+    def test_bad_options_throw_naming_the_parameter(self, module_dir: Path, options: dict, kind: str, name: str) -> None:
+        result = run_node(module_dir, [[0.5, 3.0, 0.0, options]])["results"][0]
+        assert result.get("error") == kind and result["message"].startswith(name), result
+
+    def test_sun_light_refuses_bad_frames(self, module_dir: Path) -> None:
+        reply = run_node(module_dir, [["sunLight", 1.6, 3.0], ["sunLight", 0.5, 7.0], ["sunLight", "0.5", 3.0],
+                                      ["sunLight", 0.5, 3.0, float("nan")]])
+        expected = [("RangeError", "sunZenith"), ("RangeError", "turbidity"), ("TypeError", "sunZenith"),
+                    ("RangeError", "sunAzimuth")]
+        for (kind, name), result in zip(expected, reply["results"]):
+            assert result.get("error") == kind and result["message"].startswith(name), result
+
+    def test_negative_control_unfiltered_ground_fails(self, sky: SkySH, module_dir: Path) -> None:
+        """A module whose ground skips the Gibbs filter must fail the comparison with the runtime."""
+        source = (module_dir / "sky_sh.mjs").read_text()
+        mutated = source.replace("gibbs ? GROUND[l] * GIBBS[g0 + l] : GROUND[l]", "GROUND[l]")
+        assert mutated != source
+        (module_dir / "mutated.mjs").write_text(mutated)
+        calls = [(0.3 + 0.1 * k, 3.0 + 0.3 * k, 0.4 * k, {"bands": 3, "gibbs": True, "dering": False,
+                                                           "groundAlbedo": [0.5, 0.4, 0.3]}) for k in range(6)]
+        reply = run_node(module_dir, [list(c) for c in calls], module="mutated.mjs")
+        assert light_error(sky, calls, reply["results"]) > CONTROL_MARGIN * JS_TOLERANCE
+
+
+# --------------------------------------------------------------------------- #
 class TestModuleText:
     def test_self_contained(self, module_dir: Path) -> None:
         source = (module_dir / "sky_sh.mjs").read_text()
@@ -446,12 +700,16 @@ class TestModuleText:
         usage = module_dir / "usage.ts"
         usage.write_text(
             'import { coefficients, engineLayout, ENGINES, type CoefficientOptions } from "./sky_sh.mjs";\n'
-            "const options: CoefficientOptions = { bands: 3, irradiance: true };\n"
+            "const options: CoefficientOptions = { bands: 3, irradiance: true, sun: true, groundAlbedo: [0.2, 0.3, 0.1],\n"
+            "  irradianceTable: null };\n"
+            "const old: number[] = coefficients(0.5, 3, 1, { ...options, irradianceTable: false });\n"
             "const c: number[] = coefficients(0.5, 3, 1, options);\n"
             "const t: Float64Array = coefficients(0.5, 3, 1, { ...options, out: new Float64Array(27) });\n"
-            "const n: number = c.length + t.length + ENGINES.length;\n"
+            "const n: number = c.length + t.length + ENGINES.length + old.length;\n"
             "if (ENGINES.length) { const shape: readonly number[] = engineLayout(ENGINES[0]).shape; void shape; }\n"
-            "void n;\n"
+            'import { sunLight } from "./sky_sh.mjs";\n'
+            "const light = sunLight(0.5, 3); const lux: number = light.rgb[0] + light.direction[2];\n"
+            "void n; void lux;\n"
         )
         bad = module_dir / "bad.ts"  # negative control: a wrong option type must not type-check
         bad.write_text('import { coefficients } from "./sky_sh.mjs";\ncoefficients(0.5, 3, 1, { bands: "3", gibs: true });\n')
@@ -479,6 +737,13 @@ def figures() -> list[dict[str, Any]]:
             for c, r in zip(calls, reply["results"])
         ]
         rows = [{"measure": "max |js - runtime| / |DC|, worst channel", "inputs": len(calls), "error": max(errors)}]
+        lit = light_calls(LIGHT_INPUTS)
+        rows.append({"measure": "the same with the sun and the ground (engines: over gain x |DC|)", "inputs": len(lit),
+                     "error": light_error(sky, lit, run_node(directory, [list(c) for c in lit])["results"])})
+        table = table_calls()
+        worst, refused, tables = table_errors(sky, table, run_node(directory, [list(c) for c in table])["results"])
+        rows.append({"measure": "every irradianceTable setting against irradiance_table (engines: over gain x |DC|)",
+                     "inputs": len(table), "refused_by_both": refused, "taking_the_table": tables, "error": worst})
         for name, bands in engine_cases():
             worst, control = engine_error(sky, directory, name, bands)
             rows.append({"measure": "max |js engine - engines.convert| / (gain x |DC|)", "engine": name, "bands": bands,

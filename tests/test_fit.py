@@ -29,14 +29,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import EPS, ROOT, chebyshev_variables, load_script
 from numpy.polynomial import chebyshev as npcheb
 
-from skysh import coefficient_file, fit, poly, preetham, sh, solar
+from skysh import coefficient_file, fit, irradiance_fit, poly, preetham, sh, solar
 from skysh.runtime import SkySH
 from skysh.sunlight import SunLight
-
-EPS: float = float(np.finfo(np.float64).eps)
-"""Machine epsilon of float64, 2.2e-16."""
 
 CONDITION_MAX: float = 1e3
 """Largest condition number of a weighted design accepted for the exact-recovery
@@ -80,6 +78,27 @@ EXP_RTOL: float = 1e-12
 """Sun values recovered from exact ln XYZ data: the fit's coefficients within condition (2) x eps,
 times sum |T_i T_j| <= 91 terms, in ln; exp turns that into the same relative error."""
 
+HALF_PI_ATOL: float = 1e-15
+"""zenith_of_air_mass at the horizon's air mass: the bisection (to 8.5e-20 rad) ends on a float next to
+pi/2; 1e-15 is about 4 ulp of pi/2."""
+
+SUN_NODE_ATOL: float = 1e-12
+"""The sun grid's air-mass variable recomputed from its zeniths vs the Chebyshev nodes: the inversion's
+relative error AIR_MASS_RTOL on m <= 36.5, over (m1 - m0) / 2 = 17.8, is <= 2e-13 in x (the test groups
+equal nodes by rounding x to 12 decimals first)."""
+
+AIR_MASS_SHARE_ATOL: float = 0.04
+"""Share of the air-mass-uniform block within 5 deg of the horizon vs the air mass's own share: 4
+binomial standard deviations of 2000 draws (sd 0.01)."""
+
+ZENITH_SHARE_MAX: float = 0.1
+"""Share of the zenith-uniform block within 5 deg of the horizon: 5 / 90 = 0.056 expected, sd 0.005 for
+2000 draws; 0.1 is 8 sd above, far below the air-mass block's share (> 0.7)."""
+
+RECOMPUTED_RTOL: float = 1e-9
+"""The worst held-out sun error recorded by build_sun vs the same quotient minus 1 recomputed here from
+the same table and points: rounding of values ~1 cancelling to ~1e-5 leaves ~1e-11 relative."""
+
 HALF_PI = math.pi / 2.0
 
 # --------------------------------------------------------------------------- #
@@ -93,13 +112,6 @@ MAX_DEGREES: tuple[int, int] = (5, 3)
 
 GRID: tuple[int, int] = (8, 5)
 """A tiny Chebyshev grid, larger than MAX_DEGREES + 1 in each variable (so every candidate fit is determined)."""
-
-
-def _chebyshev_variables(ts: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """x affine in the sun zenith, y affine in log(turbidity), both onto [-1, 1] (typed from the file's basis text)."""
-    x = 4.0 * np.asarray(ts, dtype=float) / math.pi - 1.0
-    y = (2.0 * np.log(t) - math.log(2.5) - math.log(6.0)) / (math.log(6.0) - math.log(2.5))
-    return x, y
 
 
 class PolynomialSky:
@@ -125,7 +137,7 @@ class PolynomialSky:
 
     def values(self, ts: np.ndarray, t: np.ndarray) -> np.ndarray:
         """(P, K_half, 3) coefficients in cd/m^2."""
-        x, y = _chebyshev_variables(ts, t)
+        x, y = chebyshev_variables(ts, t)
         scale = preetham.luminance_scale(ts, t)
         out = np.empty((np.size(ts), len(self.layout), 3))
         for row in range(len(self.layout)):
@@ -211,7 +223,7 @@ class TestFitTable:
         ts, t = fit.chebyshev_grid(GRID)
         a, _ = fit.fit_table(ts, t, psky.values(ts, t), psky.denominator(ts, t), TRUE_DEGREES)
         b, _ = fit.fit_table(ts, t, psky.values(ts, t), psky.denominator(ts, t, np.random.default_rng(1)), TRUE_DEGREES)
-        np.testing.assert_allclose(a, b, rtol=0, atol=2 * FIT_EXACT_RTOL * np.abs(a).max())
+        np.testing.assert_allclose(a, b, rtol=0, atol=2 * FIT_EXACT_RTOL * np.abs(a).max())  # two fits
 
     def test_plain_variant_recovers_plain_polynomial(self) -> None:
         # variant (False, False): the seed's plain polynomial (no scale, turbidity affine).
@@ -301,7 +313,7 @@ class TestBuild:
         assert table.tables["sun"].degrees.tolist() == [list(settings.sun_degrees)]
         assert table.metadata["tables"]["sun"]["errors"]["worst"] <= SUN_GOAL
         # The runtime built from this table evaluates the same polynomial.
-        path = coefficient_file.write(tmp_path / "synthetic.npz", table)
+        path = coefficient_file.write(tmp_path / "synthetic.npz", _with_shipped_irradiance(table))
         runtime = SkySH.load(path)
         got = runtime.coefficients(0.9, 3.3, 0.0, bands=3, gibbs=False)
         expected = psky.values(np.array([0.9]), np.array([3.3]))[0]
@@ -321,7 +333,7 @@ class TestBuild:
         # The held-out truth is the reference projection.
         np.testing.assert_array_equal(hc[0], preetham.sky_sh(float(hts[0]), float(ht[0]), 2)[[0, 2, 3]])
         # Round trip through the file, then the runtime equals evaluate_table (phi = 0, no Gibbs).
-        path = coefficient_file.write(tmp_path / "tiny.npz", table)
+        path = coefficient_file.write(tmp_path / "tiny.npz", _with_shipped_irradiance(table))
         runtime = SkySH.load(path)
         got = runtime.coefficients(hts, ht, 0.0, bands=2, gibbs=False)[:, [0, 2, 3]]
         np.testing.assert_allclose(got, predicted, rtol=0, atol=EVAL_RTOL * np.abs(predicted).max())
@@ -358,14 +370,14 @@ class TestSunGrid:
         m0, m1 = solar.relative_optical_mass([0.0, HALF_PI])
         m = np.linspace(m0 + 1e-6, m1, 500)
         np.testing.assert_allclose(solar.relative_optical_mass(fit.zenith_of_air_mass(m)), m, rtol=AIR_MASS_RTOL, atol=0)
-        assert fit.zenith_of_air_mass(np.array([m1]))[0] == pytest.approx(HALF_PI, abs=1e-15)
+        assert fit.zenith_of_air_mass(np.array([m1]))[0] == pytest.approx(HALF_PI, abs=HALF_PI_ATOL)
 
     def test_nodes(self) -> None:
         ts, t = fit.sun_grid((6, 4))
         assert ts.shape == t.shape == (24,)
         nodes_x = np.sort(np.cos((2 * np.arange(6) + 1) * math.pi / 12))
         nodes_y = np.sort(np.cos((2 * np.arange(4) + 1) * math.pi / 8))
-        np.testing.assert_allclose(np.unique(np.round(_sun_x(ts), 12)), nodes_x, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(np.unique(np.round(_sun_x(ts), 12)), nodes_x, rtol=0, atol=SUN_NODE_ATOL)
         np.testing.assert_allclose(np.unique(2.0 * (t - 2.5) / 3.5 - 1.0), nodes_y, rtol=0, atol=NODE_ATOL)
 
     def test_held_out_points(self) -> None:
@@ -377,8 +389,8 @@ class TestSunGrid:
         m0, m1 = solar.relative_optical_mass([0.0, HALF_PI])
         share = (m1 - solar.relative_optical_mass(math.radians(85.0))) / (m1 - m0)
         near = np.mean(ts[2000:4000] > math.radians(85.0))
-        assert abs(near - share) < 0.04 and share > 0.7  # binomial sd of 2000 draws: 0.01
-        assert np.mean(ts[:2000] > math.radians(85.0)) < 0.1  # the first block is uniform in the zenith
+        assert abs(near - share) < AIR_MASS_SHARE_ATOL and share > 0.7
+        assert np.mean(ts[:2000] > math.radians(85.0)) < ZENITH_SHARE_MAX  # the first block is uniform in the zenith
         np.testing.assert_array_equal(fit.sun_held_out_points(2000, 5)[0], ts)  # seeded
 
 
@@ -422,7 +434,7 @@ class TestSunFit:
         hs, ht = fit.sun_held_out_points(64, settings.seed)
         xyz = fit.evaluate_sun_table(sun.table, settings.sun_degrees, hs, ht)
         assert np.abs(xyz / solar.illuminance_xyz(hs, ht) - 1.0).max() == pytest.approx(
-            max(block["errors"]["xyz_relative_worst"]), rel=1e-9)
+            max(block["errors"]["xyz_relative_worst"]), rel=RECOMPUTED_RTOL)
         assert block["errors"]["worst"] <= SUN_GOAL and block["largest_abs_sum"] < 50.0
         assert block["condition_number"] < CONDITION_MAX
 
@@ -430,18 +442,18 @@ class TestSunFit:
 # --------------------------------------------------------------------------- #
 # tools/fit_sky.py: --out, --force and one-line refusals
 # --------------------------------------------------------------------------- #
-ROOT = Path(__file__).resolve().parent.parent
-
-
 @pytest.fixture(scope="module")
 def fit_sky():
     """tools/fit_sky.py as a module (its main(argv) is what `skysh fit` runs)."""
-    import importlib.util
+    return load_script(ROOT / "tools" / "fit_sky.py", "fit_sky_under_test")
 
-    spec = importlib.util.spec_from_file_location("fit_sky_under_test", ROOT / "tools" / "fit_sky.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+
+def _with_shipped_irradiance(table: coefficient_file.SkyTable) -> coefficient_file.SkyTable:
+    """``table`` with the shipped file's irradiance table and block (format 4 requires one; fit.build fits the sky)."""
+    shipped = coefficient_file.read()
+    blocks = {**table.metadata["tables"], "irradiance": shipped.metadata["tables"]["irradiance"]}
+    return coefficient_file.SkyTable(table.table, table.degrees, {**table.metadata, "tables": blocks},
+                                     {**table.tables, "irradiance": shipped.tables["irradiance"]})
 
 
 @pytest.fixture()
@@ -458,6 +470,10 @@ def fake_build(monkeypatch: pytest.MonkeyPatch, psky: PolynomialSky) -> list:
         return table, report, {}
 
     monkeypatch.setattr(fit, "build", build)
+    shipped = coefficient_file.read()  # the irradiance's convex problems replaced by the shipped table
+    irradiance = (shipped.tables["irradiance"].table, shipped.tables["irradiance"].degrees,
+                  shipped.metadata["tables"]["irradiance"])
+    monkeypatch.setattr(irradiance_fit, "build_table", lambda *args, **kwargs: irradiance)
     return calls
 
 

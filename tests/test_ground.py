@@ -17,14 +17,31 @@ import math
 
 import numpy as np
 import pytest
+from conftest import EPS, random_unit_vectors, scipy_real_sh
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from scipy.special import sph_harm_y
 
 from skysh import ground, preetham, sh, solar
 
-EPS: float = float(np.finfo(np.float64).eps)
-"""Machine epsilon of float64."""
+ROUNDING_RTOL: float = EPS
+"""One or two correctly rounded operations on exact inputs (a product or quotient by pi, a
+channel scale): each within half an ulp, so within eps relative."""
+
+CLOSED_FORM_RTOL: float = 2 * EPS
+"""A square root of a rounded product, times an exact number, on both sides (sqrt(3 pi) / 2,
+sqrt(4 pi / 3) x c_10): up to four half-ulp roundings."""
+
+VIEW_FACTOR_ATOL: float = 1e-13
+"""Absolute floor of the tilted-plane comparison: at tilt 0 the ground is out of view and both
+sides are 0 up to the rounding of sums of values <= pi (~1e-15)."""
+
+PROPERTY_RTOL: float = 1e-12
+"""SH irradiance of the ground (exact for >= 2 bands) vs pi L (1 - n_z) / 2 at up to 12 bands:
+rounding of a <= 144-term sum of terms <= L; relative, with the same absolute floor x max(L, 1)."""
+
+SUN_DELTA_RTOL: float = 1e-14
+"""sqrt(4 pi / 3) c_10 of an unwindowed delta of 1e5 lux vs 1e5 cos(theta): two square roots and
+two products (a few ulp); for cos(1.5) = 0.07 the same bound taken absolute, x 1e5."""
 
 ZONAL_ATOL: float = 1e-12
 """The brief's figure: closed form vs a converged quadrature of the uniform lower hemisphere
@@ -48,22 +65,6 @@ ZONAL_BANDS: int = 16
 """Bands checked against the quadrature (the closed form is tabulated to 64)."""
 
 
-def scipy_real_sh(dirs: np.ndarray, bands: int) -> np.ndarray:
-    """Real orthonormal SH with the Condon-Shortley phase from scipy's complex Y (its phase included)."""
-    theta = np.arctan2(np.hypot(dirs[:, 0], dirs[:, 1]), dirs[:, 2])
-    phi = np.arctan2(dirs[:, 1], dirs[:, 0])
-    out = np.empty((dirs.shape[0], bands * bands))
-    for l in range(bands):
-        for m in range(l + 1):
-            y = sph_harm_y(l, m, theta, phi)
-            if m == 0:
-                out[:, l * l + l] = y.real
-            else:
-                out[:, l * l + l + m] = math.sqrt(2.0) * y.real
-                out[:, l * l + l - m] = math.sqrt(2.0) * y.imag
-    return out
-
-
 def lower_hemisphere_rule(n_z: int, n_phi: int) -> tuple[np.ndarray, np.ndarray]:
     """Gauss-Legendre in z on [-1, 0] x uniform azimuth: exact for Y_lm (l < n_z, |m| < n_phi)."""
     x, wx = np.polynomial.legendre.leggauss(n_z)
@@ -74,11 +75,6 @@ def lower_hemisphere_rule(n_z: int, n_phi: int) -> tuple[np.ndarray, np.ndarray]
     return dirs.reshape(-1, 3), np.repeat(wz * 2 * math.pi / n_phi, n_phi)
 
 
-def random_dirs(n: int, seed: int) -> np.ndarray:
-    v = np.random.default_rng(seed).normal(size=(n, 3))
-    return v / np.linalg.norm(v, axis=-1, keepdims=True)
-
-
 class TestGroundSH:
     def test_against_converged_quadrature(self) -> None:
         dirs, w = lower_hemisphere_rule(64, 64)
@@ -87,8 +83,8 @@ class TestGroundSH:
         np.testing.assert_allclose(got, expected, rtol=0, atol=ZONAL_ATOL)
 
     def test_closed_form_values(self) -> None:
-        assert ground.GROUND_ZONAL[0] == pytest.approx(math.sqrt(math.pi), rel=EPS)
-        assert ground.GROUND_ZONAL[1] == pytest.approx(-math.sqrt(3 * math.pi) / 2, rel=2 * EPS)
+        assert ground.GROUND_ZONAL[0] == pytest.approx(math.sqrt(math.pi), rel=ROUNDING_RTOL)
+        assert ground.GROUND_ZONAL[1] == pytest.approx(-math.sqrt(3 * math.pi) / 2, rel=CLOSED_FORM_RTOL)
         assert np.all(ground.GROUND_ZONAL[2::2] == 0.0)
         assert ground.GROUND_ZONAL.shape == (sh.MAX_BANDS,)
 
@@ -100,7 +96,7 @@ class TestGroundSH:
         others = [i for i in range(16) if i not in zonal]
         assert np.all(got[:, others, :] == 0.0)
         np.testing.assert_array_equal(got[1], ground.ground_sh(lg[1], 4))
-        np.testing.assert_allclose(got[0, zonal, 2], 3.0 * ground.GROUND_ZONAL[:4], rtol=EPS)
+        np.testing.assert_allclose(got[0, zonal, 2], 3.0 * ground.GROUND_ZONAL[:4], rtol=ROUNDING_RTOL)
 
     def test_bad_input(self) -> None:
         with pytest.raises(ValueError, match="radiance"):
@@ -115,12 +111,12 @@ class TestGroundRadiance:
     def test_energy_albedo_one(self) -> None:
         e_h = np.array([30_000.0, 31_000.0, 35_000.0])
         lg = ground.ground_radiance(1.0, e_h)
-        np.testing.assert_allclose(math.pi * lg, e_h, rtol=EPS)  # exitance = horizontal irradiance
+        np.testing.assert_allclose(math.pi * lg, e_h, rtol=ROUNDING_RTOL)  # exitance = horizontal irradiance
 
     def test_rgb_albedo_and_default_black(self) -> None:
         e_h = np.array([[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]])
         got = ground.ground_radiance([0.2, 0.5, 1.0], e_h)
-        np.testing.assert_allclose(got, e_h * [0.2, 0.5, 1.0] / math.pi, rtol=EPS)
+        np.testing.assert_allclose(got, e_h * [0.2, 0.5, 1.0] / math.pi, rtol=ROUNDING_RTOL)
         assert np.all(ground.ground_radiance(0.0, e_h) == 0.0)
 
     @pytest.mark.parametrize("albedo", [-0.01, 1.01, math.nan, [0.5, 0.5], [[0.5, 0.5, 0.5]], "grey", math.inf])
@@ -138,7 +134,7 @@ class TestGroundRadiance:
 class TestGroundIrradiance:
     @pytest.mark.parametrize("bands", range(2, 8))
     def test_sh_irradiance_is_exact_for_two_or_more_bands(self, bands: int) -> None:
-        normals = np.concatenate([random_dirs(500, bands), [[0, 0, 1.0], [0, 0, -1.0], [1.0, 0, 0]]])
+        normals = np.concatenate([random_unit_vectors(500, bands), [[0, 0, 1.0], [0, 0, -1.0], [1.0, 0, 0]]])
         e_sh = sh.evaluate(sh.irradiance(ground.ground_sh([1.0], bands)), normals)[:, 0]
         np.testing.assert_allclose(e_sh, ground.ground_irradiance([1.0], normals)[:, 0], rtol=0, atol=IRRADIANCE_ATOL)
         assert abs(e_sh[-3]) <= IRRADIANCE_ATOL  # the upward normal sees no ground
@@ -158,14 +154,14 @@ class TestGroundIrradiance:
                 frac = (1.0 if a < 0 else 0.0) if abs(r) <= abs(a) else math.acos(a / abs(r)) / math.pi
                 total += wi * ti * 2 * math.pi * frac
         n = np.array([s, 0.0, c])
-        assert ground.ground_irradiance([1.0], n)[0] == pytest.approx(total, rel=VIEW_FACTOR_RTOL, abs=1e-13)
+        assert ground.ground_irradiance([1.0], n)[0] == pytest.approx(total, rel=VIEW_FACTOR_RTOL, abs=VIEW_FACTOR_ATOL)
 
     @settings(max_examples=50, deadline=None)
     @given(bands=st.integers(2, 12), lg=st.floats(0.0, 1e5), theta=st.floats(0.0, math.pi), phi=st.floats(-3.2, 3.2))
     def test_property_linear_and_exact(self, bands: int, lg: float, theta: float, phi: float) -> None:
         n = np.array([math.sin(theta) * math.cos(phi), math.sin(theta) * math.sin(phi), math.cos(theta)])
         e = sh.evaluate(sh.irradiance(ground.ground_sh([lg], bands)), n)[0]
-        assert e == pytest.approx(math.pi * lg * (1 - n[2]) / 2, rel=1e-12, abs=1e-12 * max(lg, 1.0))
+        assert e == pytest.approx(math.pi * lg * (1 - n[2]) / 2, rel=PROPERTY_RTOL, abs=PROPERTY_RTOL * max(lg, 1.0))
 
 
 class TestHorizontalIrradiance:
@@ -180,13 +176,16 @@ class TestHorizontalIrradiance:
         for ts in (0.0, 0.6, 1.5):
             d = solar.sun_direction(ts, 0.8)
             c = solar.sun_sh(d, [1e5], 4, window=np.ones(4))
-            assert ground.horizontal_irradiance_from_sh(c)[0] == pytest.approx(1e5 * math.cos(ts), rel=1e-14, abs=1e-9)
+            assert ground.horizontal_irradiance_from_sh(c)[0] == pytest.approx(1e5 * math.cos(ts), rel=SUN_DELTA_RTOL,
+                                                                                  abs=SUN_DELTA_RTOL * 1e5)
 
     def test_shapes_and_bad_input(self) -> None:
         c = np.zeros((2, 9, 3))
         c[..., 2, :] = 1.0
-        np.testing.assert_allclose(ground.horizontal_irradiance_from_sh(c), np.full((2, 3), math.sqrt(4 * math.pi / 3)))
-        assert ground.horizontal_irradiance_from_sh(np.arange(4.0)) == pytest.approx(2 * math.sqrt(4 * math.pi / 3))
+        np.testing.assert_allclose(ground.horizontal_irradiance_from_sh(c), np.full((2, 3), math.sqrt(4 * math.pi / 3)),
+                                   rtol=CLOSED_FORM_RTOL)
+        expected = 2 * math.sqrt(4 * math.pi / 3)
+        assert ground.horizontal_irradiance_from_sh(np.arange(4.0)) == pytest.approx(expected, rel=CLOSED_FORM_RTOL)
         for bad in (np.zeros(1), np.zeros((5, 3)), np.array([0.0, 0.0, math.nan, 0.0])):
             with pytest.raises(ValueError, match="coeffs"):
                 ground.horizontal_irradiance_from_sh(bad)

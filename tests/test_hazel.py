@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 import pytest
+from conftest import random_unit_vectors, unit
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -31,15 +32,6 @@ IDENTITY_TOLERANCE: float = 1e-9
 """Relative tolerance of exact algebraic identities evaluated through pow and sqrt in float64
 (I(d) - I(-d) = 4 |R1|, r = 1 for one delta light): rounding is ~1e-15, cancellation near r = 0 costs
 a few more digits."""
-
-
-def unit(v) -> np.ndarray:
-    v = np.asarray(v, dtype=np.float64)
-    return v / np.linalg.norm(v, axis=-1, keepdims=True)
-
-
-def random_dirs(n: int, seed: int) -> np.ndarray:
-    return unit(np.random.default_rng(seed).normal(size=(n, 3)))
 
 
 @st.composite
@@ -126,7 +118,7 @@ class TestReconstruction:
     @pytest.mark.parametrize("k", [1, 4, 9])
     def test_equal_to_the_orthonormal_route(self, k):
         coeffs = np.random.default_rng(4).normal(size=(k, 3))
-        dirs = random_dirs(200, 5)
+        dirs = random_unit_vectors(200, 5)
         scale = np.abs(coeffs).max()
         orthonormal_radiance = sh.evaluate(coeffs, dirs)
         orthonormal_irradiance = sh.evaluate(sh.irradiance(coeffs), dirs) / math.pi
@@ -135,7 +127,7 @@ class TestReconstruction:
 
     def test_n_dimensional(self):
         coeffs = np.random.default_rng(6).normal(size=(7, 9, 3))
-        dirs = random_dirs(11, 7)
+        dirs = random_unit_vectors(11, 7)
         batched = hazel.irradiance(coeffs[:, None], dirs)  # (7, 11, 3)
         assert batched.shape == (7, 11, 3)
         for p in (0, 6):
@@ -159,7 +151,7 @@ class TestReconstruction:
         dirs, powers = lights
         coeffs = sh.basis(dirs, 3).T @ powers  # exact projection of the deltas
         _, r1, _ = hazel.to_normalised(coeffs)
-        normals = random_dirs(50, 8)
+        normals = random_unit_vectors(50, 8)
         difference = exact_delta_irradiance(dirs, powers, normals) - exact_delta_irradiance(dirs, powers, -normals)
         np.testing.assert_allclose(normals @ r1, difference / 4, atol=ROUTE_TOLERANCE * powers.sum())
 
@@ -191,9 +183,9 @@ class TestGeomerics:
         return l0 * (a + (1.0 - a) * (p + 1.0) * q**p)
 
     def test_matches_the_shader(self):
-        coeffs = sh.basis(random_dirs(3, 9), 2).T @ np.array([[1.0, 0.2], [2.0, 0.0], [0.5, 0.1]])  # (4, 2)
+        coeffs = sh.basis(random_unit_vectors(3, 9), 2).T @ np.array([[1.0, 0.2], [2.0, 0.0], [0.5, 0.1]])  # (4, 2)
         coeffs[0, 1] += 1.0
-        normals = random_dirs(20, 10)
+        normals = random_unit_vectors(20, 10)
         got = hazel.irradiance_l1_nonlinear(coeffs, normals)
         r0, r1, _ = hazel.to_normalised(coeffs)
         for i in range(0, 20, 5):  # the reference is scalar
@@ -208,7 +200,7 @@ class TestGeomerics:
         coeffs = sh.basis(dirs, 2).T @ powers
         r0, r1, _ = hazel.to_normalised(coeffs)
         length = np.linalg.norm(r1)
-        normals = random_dirs(200, 11)
+        normals = random_unit_vectors(200, 11)
         values = hazel.irradiance_l1_nonlinear(coeffs, normals)
         assert np.all(values >= 0.0)
         if length > IDENTITY_TOLERANCE * r0:  # else the direction d is undefined
@@ -235,7 +227,7 @@ class TestGeomerics:
     def test_uniform_upper_hemisphere(self):
         """Linear L1 is exact for a uniform hemisphere, I = L (1 + n_z) / 2; the model gives L (1/6 + q^2)."""
         c = sh.project(lambda d: np.ones(d.shape[0]), 2, hemisphere=True)  # L = 1
-        normals = random_dirs(30, 17)
+        normals = random_unit_vectors(30, 17)
         np.testing.assert_allclose(hazel.irradiance(c, normals), (1 + normals[:, 2]) / 2, atol=ROUTE_TOLERANCE)
         q = (1 + normals[:, 2]) / 2
         np.testing.assert_allclose(hazel.irradiance_l1_nonlinear(c, normals), 1 / 6 + q**2, rtol=IDENTITY_TOLERANCE)
@@ -243,13 +235,13 @@ class TestGeomerics:
     def test_uniform_light_and_zero(self):
         c = np.zeros((4, 2))
         c[0, 0] = 2 * math.sqrt(math.pi) * 5.0
-        out = hazel.irradiance_l1_nonlinear(c, random_dirs(10, 12))
+        out = hazel.irradiance_l1_nonlinear(c, random_unit_vectors(10, 12))
         np.testing.assert_allclose(out[:, 0], 5.0, rtol=ROUTE_TOLERANCE)
         np.testing.assert_array_equal(out[:, 1], 0.0)
 
     def test_unphysical_input_stays_finite(self):
         c = np.array([[-1.0], [3.0], [0.0], [0.0]])
-        out = hazel.irradiance_l1_nonlinear(c, random_dirs(10, 13))
+        out = hazel.irradiance_l1_nonlinear(c, random_unit_vectors(10, 13))
         assert np.all(np.isfinite(out))
         with pytest.raises(ValueError, match="K = 4 or 9"):
             hazel.irradiance_l1_nonlinear(np.ones((1, 3)), [0.0, 0.0, 1.0])
@@ -257,7 +249,7 @@ class TestGeomerics:
     def test_n_dimensional(self):
         coeffs = np.abs(np.random.default_rng(14).normal(size=(5, 9, 3)))
         coeffs[:, 0] += 5.0
-        normals = random_dirs(6, 15)
+        normals = random_unit_vectors(6, 15)
         batched = hazel.irradiance_l1_nonlinear(coeffs[:, None], normals)
         assert batched.shape == (5, 6, 3)
         np.testing.assert_allclose(batched[2], hazel.irradiance_l1_nonlinear(coeffs[2], normals), rtol=ROUTE_TOLERANCE)

@@ -459,7 +459,6 @@ OTHER_ROWS: list[Row] = [
     Row("dering.window_table", _other("dering", "window_table"), dict(bands=3),
         dict(bands=Count(1, 7), target=Choice(("irradiance", "radiance")))),
     # skysh.shmin
-    Row("shmin.min_bound", _other("shmin", "min_bound"), dict(coeffs=C9), dict(coeffs=Coeffs())),
     Row("shmin.exact_min", _other("shmin", "exact_min"), dict(coeffs=C9, return_dirs=False),
         dict(coeffs=Coeffs(), return_dirs=Flag())),
     Row("shmin.sphere_quadratic", _other("shmin", "sphere_quadratic"), dict(coeffs=C9[:, 0]), dict(coeffs=Values((

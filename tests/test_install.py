@@ -1,8 +1,9 @@
 """The wheel installs into a fresh virtual environment and runs there, data file included.
 
-The environment uses ``--system-site-packages`` so numpy, scipy and colour-science
-come from the test machine (no network needed); skysh itself is installed from the
-wheel only (``--no-deps --no-index``) and run from a directory outside the
+The wheel is conftest's session fixture ``wheel`` (built once, shared with
+``tests/test_wheel.py``). The environment uses ``--system-site-packages`` so numpy,
+scipy, colour-science and pip come from the test machine (no network needed, no
+pip bootstrap); skysh itself is installed from the wheel only (``--no-deps --no-index``) and run from a directory outside the
 repository, so nothing can be imported from the source tree.
 """
 
@@ -11,27 +12,20 @@ from __future__ import annotations
 import json
 import os
 import subprocess
-import sys
 import venv
 from pathlib import Path
 
 import pytest
-
-ROOT = Path(__file__).resolve().parent.parent
+from conftest import ROOT, environment_without_pythonpath
 
 
 @pytest.fixture(scope="module")
-def installed(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """Build the wheel, make a venv, install the wheel; return the venv's bin directory."""
+def installed(wheel: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A fresh venv (no pip of its own: the system's, seen through its site packages, installs into it)
+    with conftest's wheel installed; return the venv's bin directory."""
     base = tmp_path_factory.mktemp("install")
-    wheels = base / "wheels"
-    subprocess.run(
-        [sys.executable, "-m", "pip", "wheel", str(ROOT), "--no-deps", "--no-build-isolation", "-q", "-w", str(wheels)],
-        check=True, capture_output=True, text=True, env=_clean_env(),
-    )
-    (wheel,) = wheels.glob("skysh-*.whl")
     env_dir = base / "venv"
-    venv.EnvBuilder(system_site_packages=True, with_pip=True).create(env_dir)
+    venv.EnvBuilder(system_site_packages=True, with_pip=False).create(env_dir)
     bin_dir = env_dir / ("Scripts" if os.name == "nt" else "bin")
     subprocess.run(
         [str(bin_dir / "python"), "-m", "pip", "install", "--no-deps", "--no-index", "-q", str(wheel)],
@@ -41,8 +35,7 @@ def installed(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def _clean_env() -> dict[str, str]:
-    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH",)}
-    return env
+    return environment_without_pythonpath()
 
 
 class TestInstalledWheel:

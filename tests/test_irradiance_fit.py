@@ -143,6 +143,16 @@ class TestSphereMinimum:
         e = np.random.default_rng(seed).normal(size=9)
         assert abs(irf.sphere_minimum(e) - dense_minimum(e)) < MIN_RTOL * np.abs(e).max() * 100
 
+    @pytest.mark.parametrize("tiny", [1e-12, 1e-9, 1e-6, 1e-4])
+    def test_near_hard_case_direction(self, tiny: float) -> None:
+        """g almost orthogonal to the lowest eigenvector (hypothesis found e7 = 1e-12): the direction attains
+        the minimum to rounding, its near-zero gap's component taken from |w| = 1."""
+        e = np.zeros(9)
+        e[[3, 5, 7]] = (1.0, 1.0, tiny)
+        value, w = irf.sphere_minimum(e, return_dirs=True)
+        assert abs(value - dense_minimum(e)) < MIN_RTOL * 100
+        assert abs(float(sh.basis(w, 3) @ e) - value) < MIN_RTOL * 100
+
     @pytest.mark.parametrize("case", ["zonal", "no_linear", "hard", "constant", "zero"])
     def test_hard_and_degenerate_cases(self, case: str) -> None:
         e = np.zeros(9)

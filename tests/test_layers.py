@@ -28,10 +28,9 @@ from pathlib import Path
 from typing import NamedTuple
 
 import pytest
+from conftest import ROOT, TOOLS
 
-ROOT: Path = Path(__file__).resolve().parent.parent
 SKYSH: Path = ROOT / "skysh"
-TOOLS: Path = ROOT / "tools"
 
 LAYERS: dict[str, int] = {
     # 0: foundation (argument checks, version, the npz reader)
@@ -47,11 +46,11 @@ LAYERS: dict[str, int] = {
     # 5: the offline fit, the per-frame sun and ground, deringing as emitted code
     "fit": 5, "lights": 5, "export_dering": 5,
     # 6: the per-frame runtime
-    "runtime": 6,
+    "runtime": 6, "export_lights": 6,
     # 7: consumers: the irradiance fit, engine conventions, rendering, exports
-    "irradiance_fit": 7, "engines": 7, "render": 7, "export": 7,
+    "irradiance_fit": 7, "engines": 7, "render": 7, "export": 7, "export_js_parts": 7,
     # 8: the JavaScript export (built on export)
-    "export_js": 8,
+    "export_js": 8, "engine_sun": 8,
     # 9: applications and the command line's text
     "viewer": 9, "cli_text": 9,
     # 10: the command line
@@ -83,14 +82,18 @@ ALLOWED: dict[str, frozenset[str]] = {name: frozenset(deps) for name, deps in {
     "fit": ("_checks", "coefficient_file", "poly", "preetham", "sh", "sunlight", "solar"),
     "lights": ("_checks", "coefficient_file", "ground", "poly", "preetham", "sh", "solar", "sunlight"),
     "runtime": ("_checks", "coefficient_file", "ground", "lights", "poly", "preetham", "sh", "sunlight", "dering"),
-    "export_dering": ("_checks", "dering", "shmin"),
+    "export_dering": ("_checks", "dering", "sh", "shmin"),
     "irradiance_fit": ("_checks", "fit", "preetham", "sh"),
     "engines": ("_checks", "sh"),
     "render": ("_checks", "ground", "lights", "preetham", "runtime", "sh", "solar"),
-    "export": ("_checks", "_version", "coefficient_file", "preetham", "runtime", "sh", "export_dering", "export_js"),
-    "export_js": ("_version", "export", "preetham", "runtime", "sh", "engines", "export_dering"),
+    "export_lights": ("_checks", "coefficient_file", "ground", "lights", "poly", "solar", "sunlight", "export_dering"),
+    "export": ("_checks", "_version", "coefficient_file", "poly", "preetham", "runtime", "sh", "export_lights",
+               "export_js"),
+    "export_js": ("_version", "export", "export_lights", "export_js_parts", "preetham", "runtime", "sh", "engines"),
+    "export_js_parts": ("export_lights", "export_dering"),
+    "engine_sun": ("_checks", "engines"),
     "viewer": ("_version", "engines", "export", "preetham", "render", "runtime", "sh"),
-    "cli_text": ("_checks", "engines", "export", "sh"),
+    "cli_text": ("_checks", "engines", "engine_sun", "export", "sh"),
     "cli": ("_version", "cli_text", "engines", "export", "export_js", "poly", "preetham", "render", "runtime", "sh",
             "sun", "viewer"),
     "__init__": ("_version", "runtime"),

@@ -33,15 +33,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import EPS, L_OF, ROOT
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from skysh import coefficient_file, fit, lights, preetham, sh, solar
 from skysh.runtime import SkySH
 
-ROOT = Path(__file__).resolve().parent.parent
 HALF_PI: float = math.pi / 2.0
-EPS: float = float(np.finfo(np.float64).eps)
 
 PATH_RTOL: float = 1e-12
 """Fused scalar path vs parts, batch, or an independent composition (sky + solar.sun_sh + ground),
@@ -83,10 +82,17 @@ NONNEGATIVE_ATOL: float = 1e-12
 (rounding of the sum over N^2 <= 49 coefficients); the deringed sky, the windowed sun and the ground
 are each >= 0 by construction."""
 
+UNIT_ATOL: float = 4 * EPS
+"""A direction from sines and cosines of the same angles by two routes (its norm, its z = cos(ts),
+batch vs scalar): a few half-ulp roundings of values <= 1."""
 
-@pytest.fixture(scope="module")
-def sky() -> SkySH:
-    return SkySH.load()
+AZIMUTH_ATOL: float = 1e-12
+"""atan2 of the direction vs the requested azimuth (mod 2 pi): the azimuth reduction errs by
+<= 2e-15 (DIRECTION_ATOL) and atan2 of components of size sin(ts) >= 0.3 adds ~eps / 0.3."""
+
+CONTROL_FACTOR: float = 100.0
+"""A negative control must miss by this many times the bound it is checked against: far outside the
+bound, so the check could not pass by chance."""
 
 
 def _close(got: np.ndarray, expected: np.ndarray, rtol: float) -> None:
@@ -108,10 +114,6 @@ def _sinc_filter(bands: int) -> np.ndarray:
     return np.array([1.0] + [math.sin(math.pi * l / bands) / (math.pi * l / bands) for l in range(1, bands)])
 
 
-def _l_of(bands: int) -> np.ndarray:
-    return np.array([l for l in range(bands) for _ in range(2 * l + 1)])
-
-
 def _horizontal_irradiance(sky: SkySH, ts: float, t: float) -> np.ndarray:
     """E_h of the fitted sky: sqrt(4 pi / 3) x its unfiltered c_10 (2 bands, no window)."""
     return math.sqrt(4.0 * math.pi / 3.0) * sky.coefficients(ts, t, 0.3, bands=2, gibbs=False)[2]
@@ -130,8 +132,12 @@ def _composed(sky: SkySH, ts: float, t: float, phi: float, bands: int, gibbs: bo
     radiance = np.asarray(albedo, dtype=float) * e_h / math.pi
     ground = np.outer(_lower_hemisphere_sh(bands), radiance)
     if gibbs:
-        ground *= _sinc_filter(bands)[_l_of(bands)][:, None]
+        ground *= _sinc_filter(bands)[L_OF[: bands * bands]][:, None]
     return total + ground
+
+
+ENERGY_SKIES: list[tuple[float, float]] = [(0.0, 2.5), (0.6, 3.4), (1.2, 6.0), (HALF_PI, 2.5), (HALF_PI, 6.0)]
+"""(sun zenith, turbidity) of the energy tests: the zenith, mid-sky, the horizon, both turbidity ends."""
 
 
 # --------------------------------------------------------------------------- #
@@ -145,7 +151,7 @@ class TestGround:
         radiance = np.array(albedo) * _horizontal_irradiance(sky, ts, t) / math.pi
         expected = np.outer(_lower_hemisphere_sh(bands), radiance)
         if gibbs:
-            expected *= _sinc_filter(bands)[_l_of(bands)][:, None]
+            expected *= _sinc_filter(bands)[L_OF[: bands * bands]][:, None]
         _close(ground, expected, QUADRATURE_RTOL)
 
     def test_ground_is_zonal_and_independent_of_the_azimuth(self, sky: SkySH) -> None:
@@ -155,12 +161,12 @@ class TestGround:
         zonal = np.array([m == 0 for l in range(5) for m in range(-l, l + 1)])
         assert np.all(np.abs(a[~zonal]) <= QUADRATURE_RTOL * np.abs(a).max())
 
-    @pytest.mark.parametrize("ts, t", [(0.0, 2.5), (0.6, 3.4), (1.2, 6.0), (HALF_PI, 2.5), (HALF_PI, 6.0)])
-    def test_energy_albedo_one_equals_the_true_horizontal_irradiance(self, sky: SkySH, ts: float, t: float) -> None:
-        ground = sky.coefficients(ts, t, 0.4, bands=3, ground_albedo=1.0) - sky.coefficients(ts, t, 0.4, bands=3)
-        exitance = math.pi * ground[0] / math.sqrt(math.pi)  # c_00 = sqrt(pi) L_g (the quadrature above)
+    @pytest.mark.slow  # sky_sh's c_10 against a plain product rule: also tests/test_preetham.py's test_converged
+    @pytest.mark.parametrize("ts, t", ENERGY_SKIES)
+    def test_the_true_horizontal_irradiance_by_direct_quadrature(self, ts: float, t: float) -> None:
+        """E_h = sqrt(4 pi / 3) c_10 of preetham.sky_sh (the truth of the energy test) against a direct
+        quadrature of the model: E_h = int L cos(theta) over the upper hemisphere (a plain product rule)."""
         truth = math.sqrt(4.0 * math.pi / 3.0) * preetham.sky_sh(ts, t, 2)[2]
-        # a direct quadrature of the model: E_h = int L cos(theta) over the upper hemisphere
         mu, wmu = np.polynomial.legendre.leggauss(400)
         mu, wmu = 0.5 * (mu + 1.0), 0.5 * wmu
         phi = (np.arange(800) + 0.5) * (2.0 * math.pi / 800)
@@ -169,12 +175,18 @@ class TestGround:
         radiance = preetham.radiance(dirs, ts, 0.0, t)
         direct = np.einsum("i,ijc->c", wmu * mu, radiance) * (2.0 * math.pi / 800)
         np.testing.assert_allclose(direct, truth, rtol=QUADRATURE_AGREEMENT)
+
+    @pytest.mark.parametrize("ts, t", ENERGY_SKIES)
+    def test_energy_albedo_one_equals_the_true_horizontal_irradiance(self, sky: SkySH, ts: float, t: float) -> None:
+        ground = sky.coefficients(ts, t, 0.4, bands=3, ground_albedo=1.0) - sky.coefficients(ts, t, 0.4, bands=3)
+        exitance = math.pi * ground[0] / math.sqrt(math.pi)  # c_00 = sqrt(pi) L_g (the quadrature above)
+        truth = math.sqrt(4.0 * math.pi / 3.0) * preetham.sky_sh(ts, t, 2)[2]  # see the direct quadrature above
         lmin = fit.error_denominator(preetham.sky_minimum(ts, t))
         bound = math.sqrt(4.0 * math.pi / 3.0) * FIT_SAFETY * sky.metadata["errors"]["by_bands"]["2"]["e_mean_worst"]
         assert np.all(np.abs(exitance - truth) <= bound * lmin), (exitance / truth - 1.0, bound * lmin / truth)
         # negative control: the Gibbs-filtered c_10 (the ground must not use it) is far off
         filtered = math.sqrt(4.0 * math.pi / 3.0) * sky.coefficients(ts, t, 0.4, bands=3, gibbs=True)[2]
-        assert np.all(np.abs(filtered - truth) > 100 * bound * lmin)
+        assert np.all(np.abs(filtered - truth) > CONTROL_FACTOR * bound * lmin)
 
     def test_energy_with_the_sun(self, sky: SkySH) -> None:
         ts, t = 0.8, 3.0
@@ -242,7 +254,7 @@ class TestSunSH:
         if not sun:  # the composition without the sun: remove its delta and its light on the ground
             expected = sky.coefficients(ts, t, phi, bands=bands) + np.outer(
                 _lower_hemisphere_sh(bands), albedo * _horizontal_irradiance(sky, ts, t) / math.pi
-            ) * _sinc_filter(bands)[_l_of(bands)][:, None]
+            ) * _sinc_filter(bands)[L_OF[: bands * bands]][:, None]
         _close(got, expected, PATH_RTOL)
 
     def test_without_a_sun_table(self) -> None:
@@ -271,13 +283,13 @@ class TestOrder:
         monkeypatch.setattr(skysh.dering, "dering", recording)
         for args in [(0.6, 3.1, 0.7), (np.array([0.6, 0.9]), 3.1, 0.7)]:
             seen.clear()
-            got = sky.coefficients(*args, irradiance=True, sun=True, ground_albedo=0.4)
+            got = sky.coefficients(*args, irradiance=True, sun=True, ground_albedo=0.4, irradiance_table=False)
             alone = sky.coefficients(*args, gibbs=False, dering=False)
             assert len(seen) == 1
             _close(seen[0], alone, PATH_RTOL)
             # the result is the halved sky plus the un-halved sun and ground, convolved
             lit = sky.coefficients(*args, gibbs=False, dering=False, sun=True, ground_albedo=0.4)
-            expected = (lit - 0.5 * alone) * sh.cosine_lobe(3)[_l_of(3)][:, None]
+            expected = (lit - 0.5 * alone) * sh.cosine_lobe(3)[L_OF[:9]][:, None]
             _close(got, expected, PATH_RTOL)
 
     @pytest.mark.parametrize("dering", [False, True])
@@ -340,10 +352,10 @@ class TestSunLight:
     def test_direction(self, sky: SkySH, phi: float) -> None:
         for ts in (0.0, 0.3, HALF_PI):
             d, _ = sky.sun_light(ts, 3.0, phi)
-            assert abs(np.linalg.norm(d) - 1.0) <= 4 * EPS and abs(d[2] - math.cos(ts)) <= 4 * EPS
+            assert abs(np.linalg.norm(d) - 1.0) <= UNIT_ATOL and abs(d[2] - math.cos(ts)) <= UNIT_ATOL
             np.testing.assert_allclose(d, solar.sun_direction(ts, phi), rtol=0, atol=DIRECTION_ATOL)
             if ts > 0.0:
-                assert abs(math.remainder(math.atan2(d[1], d[0]) - phi, 2 * math.pi)) <= 1e-12
+                assert abs(math.remainder(math.atan2(d[1], d[0]) - phi, 2 * math.pi)) <= AZIMUTH_ATOL
 
     def test_batch_equals_scalar(self, sky: SkySH) -> None:
         ts, t, phi = np.array([[0.1, 0.9], [1.2, HALF_PI]]), np.array([2.5, 5.0]), 0.4
@@ -352,7 +364,7 @@ class TestSunLight:
         for i in range(2):
             for j in range(2):
                 d1, rgb1 = sky.sun_light(float(ts[i, j]), float(t[j]), phi)
-                np.testing.assert_allclose(d[i, j], d1, rtol=0, atol=4 * EPS)
+                np.testing.assert_allclose(d[i, j], d1, rtol=0, atol=UNIT_ATOL)
                 np.testing.assert_allclose(rgb[i, j], rgb1, rtol=PATH_RTOL, atol=PATH_RTOL * abs(rgb1).max())
 
     def test_any_real_scalar(self, sky: SkySH) -> None:
@@ -360,7 +372,7 @@ class TestSunLight:
         for args in [(0.5, 3, 1), (np.float32(0.5), np.int64(3), np.array(1.0))]:
             got = sky.sun_light(*args)
             assert got[0].shape == got[1].shape == (3,)
-            np.testing.assert_allclose(got[1], expected[1], rtol=1e-7)  # float32(0.5) is exact; 1e-7 for the rest
+            np.testing.assert_allclose(got[1], expected[1], rtol=PATH_RTOL)  # every value here is exact in float64
 
     @pytest.mark.parametrize("kwargs, name", [
         ({"sun_zenith": 1.6}, "sun_zenith"), ({"sun_zenith": float("nan")}, "sun_zenith"),

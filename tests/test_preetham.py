@@ -17,17 +17,14 @@ from __future__ import annotations
 import itertools
 import math
 import subprocess
-import sys
-from pathlib import Path
 
 import colour
 import numpy as np
 import pytest
+from conftest import EPS, dc_relative_error, pythons_without_matplotlib
+from scipy.special import sph_harm_y
 
 from skysh import preetham, sh
-
-EPS: float = float(np.finfo(np.float64).eps)
-"""Machine epsilon of float64, 2.2e-16."""
 
 FORMULA_RTOL: float = 1e-13
 """skysh vs the formulas of PREETHAM.md typed here: the same dozen flops in
@@ -71,6 +68,43 @@ the moved sky directly: that rule's error is measured <= 2.2e-6 of the DC term
 MC_SIGMAS: float = 5.0
 """Random projections of the sky must land within 5 standard errors (estimated
 from an independent sample) of the converged coefficients."""
+
+MC_FLOOR_RTOL: float = 1e-12
+"""Absolute floor of the random-projection check, relative to the DC term: coefficients whose
+standard error is (near) zero still differ from the dense rule by that rule's rounding."""
+
+HORIZON_CONTINUITY_RTOL: float = 1e-3
+"""Luminance 1e-6 rad above the horizon vs at it: the model is smooth there (measured change
+9.5e-7 relative); a mishandled exp(B / cos theta) at cos theta = 0 would jump by O(1)."""
+
+SRGB_MATRIX_RTOL: float = 2e-4
+"""sRGB's white through colour-science's XYZ -> sRGB matrix: that matrix is the 4-digit one
+published with IEC 61966-2-1, so R = G = B = Y only to its rounding (measured 1.6e-4)."""
+
+DERIVED_MATRIX_RTOL: float = 1e-12
+"""A colourspace's white through its matrix derived in float64 from the primaries and white
+(BT.2020, ACEScg): the derivation's rounding times a condition number of a few (measured 1 eps)."""
+
+INVERSE_ROW_RTOL: float = 1e-12
+"""Y from the Y row of the inverted XYZ -> sRGB matrix (numpy's 3x3 inverse, condition ~ 3)
+applied to RGB: a few ulp (measured 1 eps)."""
+
+UNIT_NORM_ATOL: float = 4 * EPS
+"""|norm - 1| of a direction built from sines and cosines: a few half-ulp roundings (measured 1 eps)."""
+
+RULE_EXACT_ATOL: float = 1e-13
+"""Integrals the sun-adapted rule computes exactly (the area 2 pi, x^2 z = pi / 4): only the
+rounding of sums of 200 - 400 weighted terms remains (measured <= 2.3e-15)."""
+
+MIRROR_RTOL: float = 1e-15
+"""m < 0 coefficients of the mirror-symmetric sky (sun at azimuth 0) by the dense product rule,
+relative to the DC term: the rule's azimuths come in mirrored pairs, so the sin(m phi) sums cancel
+pair by pair up to rounding of terms far below the DC term (measured <= 3.5e-17)."""
+
+COLOURSPACE_RTOL: float = 1e-12
+"""sky_sh in another colourspace vs a 3x3 change of the sRGB coefficients: the projection is linear,
+so only the matrices' rounding (products of a matrix and an inverse, condition ~ 3) remains,
+relative to the largest coefficient (measured 6.9e-16)."""
 
 
 # --------------------------------------------------------------------------- #
@@ -132,28 +166,48 @@ SUNS = [(0.0, 2.5), (0.0, 6.0), (1.0, 2.5), (1.0, 6.0), (math.pi / 2, 2.5), (mat
 """(sun_zenith, turbidity) of the sky_sh convergence test: zenith, mid-sky, horizon x the fitted turbidities."""
 
 
+CONVERGED_N_THETA: int = 640
+"""Gauss nodes in z of the dense product rule of :func:`converged_sky_sh` (2 x 640 azimuths each)."""
+
+RINGS_PER_CHUNK: int = 80
+"""Rings of that rule evaluated at once (80 x 1,280 directions x 6 skies): bounds the memory."""
+
+
 @pytest.fixture(scope="module")
 def converged_sky_sh() -> dict[tuple[float, float], np.ndarray]:
-    """SH (49, 3) of the skies of SUNS by sh.quadrature_rule(640, hemisphere=True).
+    """SH (49, 3) of the skies of SUNS by a dense product rule on the upper hemisphere.
 
-    819,200 directions, evaluated in chunks of 102,400 to bound memory; a rule
-    independent of sky_sh's sun-adapted one (no panel at the sun, no mirrored
-    half, m < 0 coefficients computed, not set to zero).
+    Gauss-Legendre in z on [0, 1] (CONVERGED_N_THETA nodes) x 1,280 uniform azimuths: 819,200
+    directions, the rule of ``sh.quadrature_rule(640, hemisphere=True)``, independent of sky_sh's
+    sun-adapted one (no panel at the sun, no mirrored half, m < 0 coefficients computed, not set
+    to zero). Summed ring by ring: the azimuth sums of L cos(m phi) and L sin(m phi), then the
+    polar parts of the real SH from scipy (``sph_harm_y`` at phi = 0, times sqrt 2 for m > 0), so
+    neither sh.basis nor its 819,200 x 49 table is used. Computed once per module.
     """
-    dirs, weights = sh.quadrature_rule(640, hemisphere=True)
+    x, wx = np.polynomial.legendre.leggauss(CONVERGED_N_THETA)
+    z, wz = 0.5 * (x + 1.0), 0.5 * wx
+    n_phi = 2 * CONVERGED_N_THETA
+    phi = (np.arange(n_phi) + 0.5) * (2.0 * math.pi / n_phi)
+    m = np.arange(7)
+    cos_m, sin_m = np.cos(np.outer(phi, m)), np.sin(np.outer(phi, m))  # (n_phi, 7)
     total = np.zeros((49, 3 * len(SUNS)))
-    chunk = 102_400
-    for start in range(0, dirs.shape[0], chunk):
-        d = np.array(dirs[start : start + chunk])
-        weighted = sh.basis(d, 7).T * weights[start : start + chunk]
-        values = np.concatenate([preetham.radiance(d, ts, 0.0, t) for ts, t in SUNS], axis=1)
-        total += weighted @ values
+    for start in range(0, CONVERGED_N_THETA, RINGS_PER_CHUNK):
+        ring = slice(start, start + RINGS_PER_CHUNK)
+        s = np.sqrt(1.0 - z[ring] ** 2)
+        d = np.stack(np.broadcast_arrays(s[:, None] * np.cos(phi), s[:, None] * np.sin(phi), z[ring, None]), axis=-1)
+        values = np.concatenate([preetham.radiance(d, ts, 0.0, t) for ts, t in SUNS], axis=-1)  # (rings, n_phi, 18)
+        by_cos = np.einsum("rpc,pm->rmc", values, cos_m) * (2.0 * math.pi / n_phi)
+        by_sin = np.einsum("rpc,pm->rmc", values, sin_m) * (2.0 * math.pi / n_phi)
+        theta = np.arccos(z[ring])
+        for l in range(7):
+            for mm in range(l + 1):
+                polar = sph_harm_y(l, mm, theta, 0.0).real * wz[ring]  # (rings,)
+                if mm == 0:
+                    total[l * l + l] += polar @ by_cos[:, 0]
+                else:
+                    total[l * l + l + mm] += math.sqrt(2.0) * (polar @ by_cos[:, mm])
+                    total[l * l + l - mm] += math.sqrt(2.0) * (polar @ by_sin[:, mm])
     return {sun: total[:, 3 * k : 3 * k + 3] for k, sun in enumerate(SUNS)}
-
-
-def dc_relative_error(coeffs: np.ndarray, reference: np.ndarray) -> float:
-    """max over coefficients of |c - ref| / ref_DC, per channel, worst channel."""
-    return float((np.abs(coeffs - reference).max(axis=0) / reference[0]).max())
 
 
 # --------------------------------------------------------------------------- #
@@ -339,7 +393,7 @@ class TestXyY:
         # z = 0 is the limit of the model: finite, non-negative, continuous from above.
         at = preetham.luminance(view(math.pi / 2, 0.3), 0.7, 0.0, 3.0)
         above = preetham.luminance(view(math.pi / 2 - 1e-6, 0.3), 0.7, 0.0, 3.0)
-        assert np.isfinite(at) and at >= 0 and abs(above - at) < 1e-3 * at
+        assert np.isfinite(at) and at >= 0 and abs(above - at) < HORIZON_CONTINUITY_RTOL * at
 
     def test_n_dimensional(self):
         dirs = upper_dirs(24, seed=3)
@@ -403,10 +457,10 @@ class TestRgbFromXyzMatrix:
         # (colour-science uses it for sRGB): 2e-4.
         cs = colour.RGB_COLOURSPACES["sRGB"]
         white = colour.xyY_to_XYZ([*cs.whitepoint, 1.0])
-        np.testing.assert_allclose(preetham.rgb_from_xyz_matrix("sRGB") @ white, [1.0, 1.0, 1.0], rtol=2e-4)
+        np.testing.assert_allclose(preetham.rgb_from_xyz_matrix("sRGB") @ white, [1.0, 1.0, 1.0], rtol=SRGB_MATRIX_RTOL)
         for name in ("ITU-R BT.2020", "ACEScg"):  # derived matrices: exact to rounding
             white = colour.xyY_to_XYZ([*colour.RGB_COLOURSPACES[name].whitepoint, 1.0])
-            np.testing.assert_allclose(preetham.rgb_from_xyz_matrix(name) @ white, [1.0, 1.0, 1.0], rtol=1e-12)
+            np.testing.assert_allclose(preetham.rgb_from_xyz_matrix(name) @ white, [1.0, 1.0, 1.0], rtol=DERIVED_MATRIX_RTOL)
 
     @pytest.mark.parametrize("bad", ["sRGBB", "", 3, None])
     def test_invalid(self, bad):
@@ -436,7 +490,7 @@ class TestRadiance:
         dirs = upper_dirs(100, seed=9)
         rgb = preetham.radiance(dirs, 0.7, 0.0, 4.0)
         y = rgb @ np.linalg.inv(colour.RGB_COLOURSPACES["sRGB"].matrix_XYZ_to_RGB)[1]
-        np.testing.assert_allclose(y, preetham.luminance(dirs, 0.7, 0.0, 4.0), rtol=1e-12)
+        np.testing.assert_allclose(y, preetham.luminance(dirs, 0.7, 0.0, 4.0), rtol=INVERSE_ROW_RTOL)
 
     def test_below_horizon(self):
         assert (preetham.radiance(-upper_dirs(50, seed=10, min_z=1e-9), 1.0, 0.0, 3.0) == 0.0).all()
@@ -463,13 +517,13 @@ class TestSkyQuadratureRule:
         dirs, weights = preetham.sky_quadrature_rule(ts, 10)
         # two zenith panels, one when the sun is at the zenith or on the horizon
         assert dirs.shape == ((4 if 0 < ts < math.pi / 2 else 2) * 100, 3)
-        np.testing.assert_allclose(np.linalg.norm(dirs, axis=-1), 1.0, atol=4 * EPS)
+        np.testing.assert_allclose(np.linalg.norm(dirs, axis=-1), 1.0, rtol=0, atol=UNIT_NORM_ATOL)
         assert (dirs[:, 2] >= -EPS).all() and (dirs[:, 1] >= 0).all()  # the half phi in [0, pi]
         # Area 2 pi, and integral over z >= 0 of x^2 z = pi * integral sin^3 cos d theta = pi / 4:
         # smooth in theta (Gauss-Legendre in theta converges spectrally, 10 nodes
         # give rounding level) and even in phi (the mirrored half is exact).
-        assert abs(weights.sum() - 2 * math.pi) < 1e-13
-        assert abs(weights @ (dirs[:, 0] ** 2 * dirs[:, 2]) - math.pi / 4) < 1e-13
+        assert abs(weights.sum() - 2 * math.pi) < RULE_EXACT_ATOL
+        assert abs(weights @ (dirs[:, 0] ** 2 * dirs[:, 2]) - math.pi / 4) < RULE_EXACT_ATOL
 
     def test_invalid(self):
         with pytest.raises(ValueError, match="sun_zenith"):
@@ -508,7 +562,7 @@ class TestSkySh:
                     assert (got[i] == 0.0).all()
             # ... and they are zero in the independent projection too (mirror symmetry).
             neg = [i for i in range(49) if sh.lm(i)[1] < 0]
-            assert np.abs(converged_sky_sh[(ts, t)][neg]).max() < 1e-15 * converged_sky_sh[(ts, t)][0].max()
+            assert np.abs(converged_sky_sh[(ts, t)][neg]).max() < MIRROR_RTOL * converged_sky_sh[(ts, t)][0].max()
 
     @pytest.mark.parametrize("phi", [0.4, -1.7, 3.0])
     def test_sun_azimuth(self, phi):
@@ -526,7 +580,7 @@ class TestSkySh:
             to_rgb = np.asarray(colour.RGB_COLOURSPACES[name].matrix_XYZ_to_RGB)
             from_srgb = to_rgb @ np.linalg.inv(np.asarray(colour.RGB_COLOURSPACES["sRGB"].matrix_XYZ_to_RGB))
             np.testing.assert_allclose(preetham.sky_sh(0.8, 3.0, bands=4, colourspace=name), srgb @ from_srgb.T,
-                                       rtol=0, atol=1e-12 * np.abs(srgb).max())
+                                       rtol=0, atol=COLOURSPACE_RTOL * np.abs(srgb).max())
 
     @pytest.mark.parametrize("method", ["mc", "stratified", "qmc"])
     def test_random_methods(self, method, converged_sky_sh):
@@ -537,7 +591,7 @@ class TestSkySh:
         d = upper_dirs(1 << 15, seed=99)
         samples = 2 * math.pi * sh.basis(d, 7)[:, :, None] * preetham.radiance(d, *sun[:1], 0.0, sun[1])[:, None, :]
         se = samples.std(axis=0) / math.sqrt(n)
-        assert (np.abs(got - converged_sky_sh[sun]) < MC_SIGMAS * se + 1e-12 * converged_sky_sh[sun][0]).all()
+        assert (np.abs(got - converged_sky_sh[sun]) < MC_SIGMAS * se + MC_FLOOR_RTOL * converged_sky_sh[sun][0]).all()
 
     @pytest.mark.parametrize("changes, name", [
         (dict(sun_zenith=-0.1), "sun_zenith"),
@@ -566,34 +620,41 @@ class TestSkySh:
             preetham.sky_sh(**kwargs)
 
 
+PRINT_OPTIONS = "import numpy as np\n{}\nprint(np.get_printoptions()['legacy'])"
+"""Prints numpy's legacy print mode after the import put in its place."""
+
+WITHOUT_MATPLOTLIB = {
+    "sky_sh": "from skysh import preetham; preetham.sky_sh(0.5, 3.0, bands=2)",
+    "colour": "import colour",
+    "other warning": "from skysh import preetham; preetham.rgb_from_xyz_matrix('sRGB')\n"
+                     "import warnings; warnings.warn('a different warning', UserWarning)",
+    "colour print options": PRINT_OPTIONS.format("import colour"),
+    "skysh print options": PRINT_OPTIONS.format("from skysh import preetham; preetham.rgb_from_xyz_matrix('sRGB')"),
+}
+"""The programs TestQuietWithoutMatplotlib runs, by name: each in a fresh interpreter with warnings shown."""
+
+
 class TestQuietWithoutMatplotlib:
     """A plain install has colour-science without matplotlib; skysh hides colour's warning about it."""
 
-    SCRIPT = "import sys; sys.modules['matplotlib'] = None\n"  # import matplotlib now fails, as on a fresh machine
+    @pytest.fixture(scope="class")
+    def runs(self) -> dict[str, subprocess.CompletedProcess]:
+        """Every program of WITHOUT_MATPLOTLIB, run once, side by side (each mostly imports colour-science)."""
+        return pythons_without_matplotlib(WITHOUT_MATPLOTLIB, "-W", "default")
 
-    def run(self, code: str) -> subprocess.CompletedProcess:
-        root = Path(__file__).resolve().parent.parent
-        return subprocess.run([sys.executable, "-W", "default", "-c", self.SCRIPT + code], capture_output=True,
-                              text=True, cwd=root)
-
-    def test_sky_sh_is_quiet(self) -> None:
-        result = self.run("from skysh import preetham; preetham.sky_sh(0.5, 3.0, bands=2)")
+    def test_sky_sh_is_quiet(self, runs: dict[str, subprocess.CompletedProcess]) -> None:
+        result = runs["sky_sh"]
         assert result.returncode == 0 and result.stderr == "", result.stderr
 
-    def test_other_colour_warnings_still_show(self) -> None:
+    def test_other_colour_warnings_still_show(self, runs: dict[str, subprocess.CompletedProcess]) -> None:
         """The filter is exactly that warning: colour's import under the shim warns without skysh (control),
         and a warning skysh does not filter still reaches the user after skysh imported colour."""
-        control = self.run("import colour")
-        assert '"Matplotlib" related API features are not available' in control.stderr
-        other = self.run(
-            "from skysh import preetham; preetham.rgb_from_xyz_matrix('sRGB')\n"
-            "import warnings; warnings.warn('a different warning', UserWarning)"
-        )
+        assert '"Matplotlib" related API features are not available' in runs["colour"].stderr
+        other = runs["other warning"]
         assert "a different warning" in other.stderr and "Matplotlib" not in other.stderr
 
-    def test_numpy_print_options_are_left_alone(self) -> None:
+    def test_numpy_print_options_are_left_alone(self, runs: dict[str, subprocess.CompletedProcess]) -> None:
         """colour-science's import sets numpy's legacy print mode (control); skysh's import of it does not."""
-        code = "import numpy as np\n{}\nprint(np.get_printoptions()['legacy'])"
-        assert self.run(code.format("import colour")).stdout.strip() == "1.13"
-        result = self.run(code.format("from skysh import preetham; preetham.rgb_from_xyz_matrix('sRGB')"))
+        assert runs["colour print options"].stdout.strip() == "1.13"
+        result = runs["skysh print options"]
         assert result.stdout.strip() == "False", result.stderr

@@ -7,6 +7,7 @@ import warnings
 
 import numpy as np
 import pytest
+from conftest import fibonacci_sphere, unit
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -38,18 +39,9 @@ PARSEVAL_TOLERANCE: float = 1e-12
 L1_RULE_TOLERANCE: float = 1e-3
 """Relative change of the L1 sums between 32 and 64 Gauss nodes (|e| has kinks; measured ~1e-5)."""
 
-def fibonacci_sphere(n: int) -> np.ndarray:
-    """n quasi-uniform unit vectors (golden-angle spiral), independent of the codec's constants."""
-    i = np.arange(n) + 0.5
-    z = 1.0 - 2.0 * i / n
-    phi = math.pi * (3.0 - math.sqrt(5.0)) * i
-    s = np.sqrt(1.0 - z * z)
-    return np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=-1)
-
-
-def unit(v) -> np.ndarray:
-    v = np.asarray(v, dtype=np.float64)
-    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+SCALED_ROUND_TRIP_RTOL: float = 1e-12
+"""A function times a large or small DC vs the function itself: the codes depend on the ratios c / dc
+only (the same codes), and decoding multiplies by dc, so out / dc differs by one or two roundings."""
 
 
 def delta_lights(dirs: np.ndarray, weights: np.ndarray) -> np.ndarray:
@@ -277,7 +269,8 @@ class TestCodec:
                 out = decompress(*compress(c, bound=bound), bound=bound)
             assert np.all(np.isfinite(out))
             if dc > 1e-300:  # normal magnitudes: the same codes as the unit function, scaled
-                np.testing.assert_allclose(out / dc, decompress(*compress(unit, bound=bound), bound=bound), rtol=1e-12)
+                np.testing.assert_allclose(out / dc, decompress(*compress(unit, bound=bound), bound=bound),
+                                           rtol=SCALED_ROUND_TRIP_RTOL)
 
     def test_decoded_beyond_the_largest_float_is_clipped(self):
         """A coefficient near the largest float decodes (within half a step) beyond it: clipped, finite."""

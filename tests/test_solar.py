@@ -20,14 +20,12 @@ import re
 import colour
 import numpy as np
 import pytest
+from conftest import EPS, L_OF, random_unit_vectors, scipy_real_sh
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from scipy.special import eval_legendre, legendre, sph_harm_y
+from scipy.special import eval_legendre, legendre
 
 from skysh import sh, solar
-
-EPS: float = float(np.finfo(np.float64).eps)
-"""Machine epsilon of float64."""
 
 FORMULA_RTOL: float = 1e-13
 """The model typed again here vs skysh: the same few exp / pow per wavelength in another order."""
@@ -66,6 +64,74 @@ E_SC_LUX: float = 128_000.0
 E_SC_RTOL: float = 0.01
 """The model's illuminance above the atmosphere against E_sc: a different extraterrestrial spectrum
 and the 380-750 nm truncation; measured 0.53 % low."""
+
+SOLID_ANGLE_PRINTED_RTOL: float = 1e-5
+"""skysh.solar's docstring prints the sun's solid angle as 6.7637e-5 sr (5 digits): half a unit of
+the last digit is 7.4e-6 relative."""
+
+ANGULAR_RADIUS_PRINTED_ATOL: float = 1e-5
+"""Degrees: the angular radius is printed as 0.26585 deg (5 decimals, half a unit = 5e-6)."""
+
+KASTEN_ZENITH_ATOL: float = 1e-3
+"""Kasten's m(0) = 1 / (1 + 0.15 x 93.885^-1.253) = 0.99949, not exactly the plane-parallel 1: its
+refraction term at the zenith is 5.1e-4."""
+
+KASTEN_60_RTOL: float = 5e-3
+"""Kasten's m(60 deg) = 1 / (0.5 + 0.15 x 33.885^-1.253) = 1.9928 against sec(60 deg) = 2: the
+curvature term lowers it by 3.6e-3 relative."""
+
+BETA_RTOL: float = 1e-14
+"""Angstrom's beta from the same 14-decimal coefficients typed here (at T = 6 the exact decimal
+result, 0.23064169003778, is written in full): one product and one difference in float64, the
+difference 0.2765 - 0.0459 amplifying the product's rounding by 1.2."""
+
+FOUR_DIGIT_BETA_ATOL: float = 2e-5
+"""The seed's 4-digit form 0.04608 T - 0.04586 rounds each coefficient by <= 0.5e-5: at T = 3,
+3 x 0.5e-5 + 0.5e-5 = 2e-5."""
+
+FEW_ROUNDINGS_RTOL: float = 4 * EPS
+"""The same value by two float64 routes that differ by a product, a quotient or their order:
+spectral_radiance / transmittance at a table node (interpolation at a node is exact),
+luminance x solid angle, the norm of a direction from sines and cosines, the DC of a delta
+(2 / (2 sqrt(pi))): a few half-ulp roundings."""
+
+COLOUR_MATRIX_RTOL: float = 1e-13
+"""skysh's XYZ -> RGB vs colour-science's XYZ_to_RGB on the same XYZ: one 3x3 matrix product in two
+libraries (a few ulp relative to the channels, all of one size for a sun 29 deg from the zenith)."""
+
+ROOT_RTOL: float = 1e-12
+"""The power-basis minimum (numpy's root of a linear derivative, then a polynomial evaluation) vs the
+vertex formula typed here: both are a few operations on values ~0.2, cancelling to ~0.02."""
+
+SEED_VERTEX_PRINTED_ATOL: float = 1e-4
+"""The seed window's minimum is quoted as -0.0746 of the mean (4 decimals: half a unit is 5e-5)."""
+
+A_TABLE_ATOL: float = 2e-6
+"""SUN_WINDOW_PARAMETERS' attenuation a is tabulated to 6 decimals, rounded down from the largest
+admissible value (by up to one unit, 1e-6; measured 1.0e-6 at 2 bands); a second unit allows for the
+bisection here and the root finder deciding the boundary case to rounding."""
+
+W_DERIVED_ATOL: float = 1e-4
+"""derive_sun_window's w against the table's: w is tabulated to 4 decimals and the derivation's
+search stops on a flat optimum; measured 3.1e-5 at 3 bands."""
+
+A_DERIVED_ATOL: float = 1e-6
+"""derive_sun_window's a against the table's (tabulated to 6 decimals, rounded down): within one
+unit; measured 3.5e-7 at 3 bands."""
+
+ERR_DERIVED_ATOL: float = 1e-6
+"""The derived window's L2 error against the table's: the a and w roundings move it by at most
+OPTIMALITY_SLACK (6e-7); measured 1.1e-7 at 3 bands."""
+
+QUADRATURE_EXACT_RTOL: float = 1e-12
+"""delta_irradiance_error vs two 40-node Gauss panels split at the kink t = 0: on each panel the
+squared error is a polynomial of degree <= 12 (bands <= 7) and 40 nodes integrate degree 79
+exactly, so only the sums' rounding and a square root remain."""
+
+UNIT_WINDOW_ATOL: float = 1e-15
+"""sun_sh with a window of ones and an illuminance of one vs sh.basis: the same basis values
+multiplied by 1.0; allows one rounding on values <= 1.1 if the product is fused in another order
+(measured 0)."""
 
 # Thekaekara (1973) NASA extraterrestrial spectral irradiance, W m^-2 um^-1, as printed by
 # https://www.mwit.ac.th/~physicslab/hbase/vision/solirrad.html (HyperPhysics): 380-550 and
@@ -150,8 +216,8 @@ class TestTables:
 
     def test_constants(self) -> None:
         assert solar.SOLAR_WAVELENGTHS.tolist() == list(range(380, 751, 10))
-        assert solar.SUN_SOLID_ANGLE == pytest.approx(6.7637e-5, rel=1e-5)
-        assert math.degrees(solar.SUN_ANGULAR_RADIUS) == pytest.approx(0.26585, abs=1e-5)
+        assert solar.SUN_SOLID_ANGLE == pytest.approx(6.7637e-5, rel=SOLID_ANGLE_PRINTED_RTOL)
+        assert math.degrees(solar.SUN_ANGULAR_RADIUS) == pytest.approx(0.26585, abs=ANGULAR_RADIUS_PRINTED_ATOL)
         assert solar.TURBIDITY_RANGE == (2.5, 6.0)
         assert solar.SOLAR_RADIANCE.flags.writeable is False
 
@@ -164,17 +230,16 @@ class TestAirMassAndBeta:
 
     def test_limits(self) -> None:
         m = solar.relative_optical_mass([0.0, math.pi / 3, math.pi / 2])
-        assert m[0] == pytest.approx(1.0, abs=1e-3)  # plane-parallel limit at the zenith
-        assert m[1] == pytest.approx(2.0, rel=5e-3)  # close to sec(60 deg)
+        assert m[0] == pytest.approx(1.0, abs=KASTEN_ZENITH_ATOL)  # plane-parallel limit at the zenith
+        assert m[1] == pytest.approx(2.0, rel=KASTEN_60_RTOL)  # close to sec(60 deg)
         assert m[2] == pytest.approx(1.0 / (0.15 * 3.885**-1.253), rel=FORMULA_RTOL)  # 36.5 at the horizon
         assert np.all(np.diff(solar.relative_optical_mass(np.linspace(0, math.pi / 2, 1000))) > 0)
 
     def test_beta(self) -> None:
         np.testing.assert_allclose(
-            solar.angstrom_beta([2.5, 6.0]), [0.04608365822050 * 2.5 - 0.04586025928522, 0.23064169003778], rtol=1e-14
+            solar.angstrom_beta([2.5, 6.0]), [0.04608365822050 * 2.5 - 0.04586025928522, 0.23064169003778], rtol=BETA_RTOL
         )
-        # The 4-digit form is its rounding: |error| <= 3 x 0.5e-5 + 0.5e-5 at T = 3.
-        assert solar.angstrom_beta(3.0) == pytest.approx(0.04608 * 3 - 0.04586, abs=2e-5)
+        assert solar.angstrom_beta(3.0) == pytest.approx(0.04608 * 3 - 0.04586, abs=FOUR_DIGIT_BETA_ATOL)
 
 
 class TestSpectralRadiance:
@@ -189,7 +254,7 @@ class TestSpectralRadiance:
     def test_table_nodes_and_transmittance(self) -> None:
         lam = solar.SOLAR_WAVELENGTHS
         ratio = solar.spectral_radiance(0.4, 3.0, lam) / solar.transmittance(0.4, 3.0, lam)
-        np.testing.assert_allclose(ratio, solar.SOLAR_RADIANCE, rtol=4 * EPS)
+        np.testing.assert_allclose(ratio, solar.SOLAR_RADIANCE, rtol=FEW_ROUNDINGS_RTOL)
         tau = solar.transmittance(np.linspace(0, math.pi / 2, 7), 6.0)
         assert np.all((tau > 0.0) & (tau < 1.0))
 
@@ -251,7 +316,7 @@ class TestLuminance:
     def test_illuminance_is_luminance_times_solid_angle(self) -> None:
         ts, tu = np.linspace(0, math.pi / 2, 5), 3.5
         np.testing.assert_allclose(
-            solar.direct_normal_illuminance(ts, tu), solar.luminance(ts, tu) * solar.SUN_SOLID_ANGLE, rtol=4 * EPS
+            solar.direct_normal_illuminance(ts, tu), solar.luminance(ts, tu) * solar.SUN_SOLID_ANGLE, rtol=FEW_ROUNDINGS_RTOL
         )
 
 
@@ -289,7 +354,7 @@ class TestRGB:
     def test_colour_route(self, name: str) -> None:
         xyz = solar.illuminance_xyz(0.5, 3.0)
         expected = colour.XYZ_to_RGB(xyz, name, chromatic_adaptation_transform=None)
-        np.testing.assert_allclose(solar.illuminance_rgb(0.5, 3.0, name), expected, rtol=1e-13)
+        np.testing.assert_allclose(solar.illuminance_rgb(0.5, 3.0, name), expected, rtol=COLOUR_MATRIX_RTOL)
 
     def test_bad_colourspace(self) -> None:
         with pytest.raises(ValueError, match="colourspace"):
@@ -297,8 +362,9 @@ class TestRGB:
 
     def test_sun_direction(self) -> None:
         d = solar.sun_direction(np.array([0.0, 0.5, math.pi / 2]), 1.0)
-        np.testing.assert_allclose(np.linalg.norm(d, axis=-1), 1.0, rtol=4 * EPS)
-        np.testing.assert_allclose(d[1], [math.sin(0.5) * math.cos(1.0), math.sin(0.5) * math.sin(1.0), math.cos(0.5)])
+        np.testing.assert_allclose(np.linalg.norm(d, axis=-1), 1.0, rtol=FEW_ROUNDINGS_RTOL)
+        np.testing.assert_allclose(d[1], [math.sin(0.5) * math.cos(1.0), math.sin(0.5) * math.sin(1.0), math.cos(0.5)],
+                                   rtol=FEW_ROUNDINGS_RTOL)
         with pytest.raises(ValueError, match="sun_azimuth"):
             solar.sun_direction(0.3, math.nan)
 
@@ -343,7 +409,8 @@ class TestSunWindow:
         t = np.linspace(-1.0, 1.0, WINDOW_DENSE_POINTS)
         assert delta_irradiance(w, t).min() >= -WINDOW_ATOL
         assert exact_minimum_power_basis(w) >= 0.0
-        assert exact_minimum_power_basis(w) >= 0.9 * solar.SUN_WINDOW_MARGIN * 0.25  # the margin, less rounding
+        # the whole margin (a is tabulated rounded down, which only raises the minimum), less rounding
+        assert exact_minimum_power_basis(w) >= solar.SUN_WINDOW_MARGIN * 0.25 - WINDOW_ATOL
 
     def test_seed_window_at_three_bands(self) -> None:
         np.testing.assert_array_equal(solar.sun_window(3, "seed"), [1.0, 0.92, 0.73])
@@ -353,8 +420,8 @@ class TestSunWindow:
         # Not non-negative alone: vertex of (1/4)[(1 - 5 s2/8) + 2 s1 t + (15/8) s2 t^2].
         s1, s2 = 0.92, 0.73
         vertex = 0.25 * ((1 - 5 * s2 / 8) - s1**2 / (15 / 8 * s2))
-        assert exact_minimum_power_basis(np.array([1.0, s1, s2])) == pytest.approx(vertex, rel=1e-12)
-        assert vertex / 0.25 == pytest.approx(-0.0746, abs=1e-4)
+        assert exact_minimum_power_basis(np.array([1.0, s1, s2])) == pytest.approx(vertex, rel=ROOT_RTOL)
+        assert vertex / 0.25 == pytest.approx(-0.0746, abs=SEED_VERTEX_PRINTED_ATOL)
         for n in (1, 2, 4, 7):  # the seed gives no window for other band counts
             np.testing.assert_array_equal(solar.sun_window(n, "seed"), solar.sun_window(n))
 
@@ -364,7 +431,7 @@ class TestSunWindow:
         np.testing.assert_array_equal(solar.SUN_WINDOWS[bands - 1], solar.sun_window_family(w, a, bands))
         best = solar.delta_irradiance_error(solar.SUN_WINDOWS[bands - 1])
         if math.isinf(w):
-            assert a == pytest.approx(largest_attenuation_here(w, bands), abs=2e-6)
+            assert a == pytest.approx(largest_attenuation_here(w, bands), abs=A_TABLE_ATOL)
             return
         for dw in (-0.05, -0.005, 0.005, 0.05):  # a neighbour with its own largest a is no better
             other = solar.sun_window_family(w + dw, largest_attenuation_here(w + dw, bands), bands)
@@ -373,8 +440,8 @@ class TestSunWindow:
     def test_derivation_reproduces_the_table(self) -> None:
         w, a, err = solar.derive_sun_window(3)
         w_t, a_t = solar.SUN_WINDOW_PARAMETERS[2]
-        assert w == pytest.approx(w_t, abs=1e-4) and a == pytest.approx(a_t, abs=1e-6)
-        assert err == pytest.approx(solar.delta_irradiance_error(solar.SUN_WINDOWS[2]), abs=1e-6)
+        assert w == pytest.approx(w_t, abs=W_DERIVED_ATOL) and a == pytest.approx(a_t, abs=A_DERIVED_ATOL)
+        assert err == pytest.approx(solar.delta_irradiance_error(solar.SUN_WINDOWS[2]), abs=ERR_DERIVED_ATOL)
 
     def test_better_than_the_seed_in_l2(self) -> None:
         assert solar.delta_irradiance_error(solar.SUN_WINDOWS[2]) < solar.delta_irradiance_error([1.0, 0.92, 0.73])
@@ -389,7 +456,7 @@ class TestSunWindow:
             exact = np.maximum(0.0, t)
             err += 2 * math.pi * (hi - lo) * 0.5 * np.sum(wx * (delta_irradiance(window, t) - exact) ** 2)
             total += 2 * math.pi * (hi - lo) * 0.5 * np.sum(wx * exact**2)
-        assert solar.delta_irradiance_error(window) == pytest.approx(math.sqrt(err / total), rel=1e-12)
+        assert solar.delta_irradiance_error(window) == pytest.approx(math.sqrt(err / total), rel=QUADRATURE_EXACT_RTOL)
 
     def test_bad_input(self) -> None:
         with pytest.raises(ValueError, match="bands"):
@@ -402,49 +469,27 @@ class TestSunWindow:
             solar.sun_window_family(5.0, 1.5, 3)
 
 
-def scipy_real_sh(dirs: np.ndarray, bands: int) -> np.ndarray:
-    """Real orthonormal SH with the Condon-Shortley phase from scipy's complex Y (its phase included)."""
-    theta = np.arctan2(np.hypot(dirs[:, 0], dirs[:, 1]), dirs[:, 2])
-    phi = np.arctan2(dirs[:, 1], dirs[:, 0])
-    out = np.empty((dirs.shape[0], bands * bands))
-    for l in range(bands):
-        for m in range(l + 1):
-            y = sph_harm_y(l, m, theta, phi)
-            if m == 0:
-                out[:, l * l + l] = y.real
-            else:
-                out[:, l * l + l + m] = math.sqrt(2.0) * y.real
-                out[:, l * l + l - m] = math.sqrt(2.0) * y.imag
-    return out
-
-
-def random_dirs(n: int, seed: int) -> np.ndarray:
-    v = np.random.default_rng(seed).normal(size=(n, 3))
-    return v / np.linalg.norm(v, axis=-1, keepdims=True)
-
-
 class TestSunSH:
     @pytest.mark.parametrize("bands", [1, 3, 7])
     def test_against_scipy(self, bands: int) -> None:
-        dirs = random_dirs(5, bands)
+        dirs = random_unit_vectors(5, bands)
         rgb = np.array([1.0e5, 0.9e5, -0.01e5])  # out-of-gamut channels may be negative
         got = solar.sun_sh(dirs, rgb, bands)
         window = solar.sun_window(bands)
-        l_of = np.repeat(np.arange(bands), 2 * np.arange(bands) + 1)
-        expected = (scipy_real_sh(dirs, bands) * window[l_of])[..., None] * rgb
-        np.testing.assert_allclose(got, expected, rtol=0, atol=SH_ATOL * 1e5)
+        expected = (scipy_real_sh(dirs, bands) * window[L_OF[: bands * bands]])[..., None] * rgb
+        np.testing.assert_allclose(got, expected, rtol=0, atol=SH_ATOL * np.abs(rgb).max())
 
     def test_dc_is_the_integral_over_4pi(self) -> None:
         got = solar.sun_sh([0.0, 0.0, 1.0], [2.0], 3, window="seed")
-        assert got[0, 0] == pytest.approx(2.0 / (2 * math.sqrt(math.pi)), rel=4 * EPS)
+        assert got[0, 0] == pytest.approx(2.0 / (2 * math.sqrt(math.pi)), rel=FEW_ROUNDINGS_RTOL)
         assert got.shape == (9, 1)
 
     def test_explicit_window_and_batch(self) -> None:
-        d = random_dirs(4, 1).reshape(2, 2, 3)
+        d = random_unit_vectors(4, 1).reshape(2, 2, 3)
         e = np.ones((2, 2, 3))
         got = solar.sun_sh(d, e, 9, window=np.ones(9))
         assert got.shape == (2, 2, 81, 3)
-        np.testing.assert_allclose(got[..., 0], sh.basis(d, 9), rtol=0, atol=1e-15)
+        np.testing.assert_allclose(got[..., 0], sh.basis(d, 9), rtol=0, atol=UNIT_WINDOW_ATOL)
 
     @settings(max_examples=60, deadline=None)
     @given(
@@ -456,7 +501,7 @@ class TestSunSH:
     def test_irradiance_nonnegative_property(self, bands: int, theta: float, phi: float, scale: float) -> None:
         d = solar.sun_direction(theta, phi)
         c = solar.sun_sh(d, [scale, 0.5 * scale, 0.1 * scale], bands)
-        e = sh.evaluate(sh.irradiance(c), random_dirs(2000, bands))
+        e = sh.evaluate(sh.irradiance(c), random_unit_vectors(2000, bands))
         assert e.min() >= -WINDOW_ATOL * 13 * scale
 
     def test_bad_input(self) -> None:

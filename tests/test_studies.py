@@ -9,17 +9,14 @@ from __future__ import annotations
 
 import math
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import random_unit_vectors, tools_on_path, unit
 
 from skysh import dering, hazel, poly, preetham, quantize
 
-TOOLS = Path(__file__).resolve().parent.parent / "tools"
-if str(TOOLS) not in sys.path:
-    sys.path.insert(0, str(TOOLS))
-
+tools_on_path()
 from studies import hazel_study, quantize_study, sky  # noqa: E402  (tools/ is not a package on the path by default)
 
 EXACT_TOLERANCE: float = 2e-4
@@ -47,15 +44,6 @@ l >= 3, so the odd parts of both are the same L1 term and the difference is roun
 L1_RULE_TOLERANCE: float = 1e-3
 """Relative change of the Table 3 L1 sums from 32 to 64 Gauss nodes (|error| has kinks where it
 changes sign, so the rule is not exact; tests/test_quantize.py uses the same bound on delta lights)."""
-
-
-def unit(v) -> np.ndarray:
-    v = np.asarray(v, dtype=np.float64)
-    return v / np.linalg.norm(v, axis=-1, keepdims=True)
-
-
-def random_dirs(n: int, seed: int) -> np.ndarray:
-    return unit(np.random.default_rng(seed).normal(size=(n, 3)))
 
 
 def lune_irradiance(normal: np.ndarray, sun_zenith: float, turbidity: float, sun_azimuth: float) -> np.ndarray:
@@ -107,7 +95,7 @@ class TestExactIrradiance:
 
     @pytest.fixture(scope="class")
     def normals(self):
-        return np.vstack([random_dirs(4, 16), [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0], unit([1.0, 0.0, 0.05])]])
+        return np.vstack([random_unit_vectors(4, 16), [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0], unit([1.0, 0.0, 0.05])]])
 
     @pytest.fixture(scope="class")
     def lune(self, normals):
@@ -152,7 +140,7 @@ class TestComparison:
         """The irradiance's odd part is its L1 term (A_l = 0 for odd l >= 3), so e(n) = e(-n): the claim
         of irradiance_comparison's notes that the upward normals alone would give the same averages."""
         ts, tu = 0.6, 3.0
-        normals = random_dirs(5, 21)
+        normals = random_unit_vectors(5, 21)
         exact_up = hazel_study.exact_irradiance(ts, tu, normals, bands=16)
         exact_down = hazel_study.exact_irradiance(ts, tu, -normals, bands=16)
         c = preetham.sky_sh(ts, tu, bands=16)

@@ -56,6 +56,51 @@ refracts for 820 hPa and 11 C where NOAA assumes a standard atmosphere (about
 SEARCH_TOL_S: float = 1e-3
 """Precision of the golden-section search for local solar noon, seconds of time."""
 
+MEEUS_T_ATOL: float = 5e-10
+"""Meeus prints the example's Julian century T = -0.072183436 to 9 decimals: half a unit."""
+
+EOT_PRINTED_S: float = 0.05
+"""Meeus prints E also as 13m 42.7s: half a tenth of a second of time (added to EOT_TOL_RAD in time)."""
+
+REFRACTION_ATOL_DEG: float = 2e-4
+"""Refraction at the solstice noon at 40 N (elevation 73.4 deg): NOAA's 58.1"/tan h - 0.07"/tan^3 h
+= 17.3" = 0.00481 deg, quoted as 0.0048; the elevation, known here to 0.1 deg, moves it by 0.11"
+(3e-5 deg) per 0.1 deg."""
+
+NOON_AZIMUTH_ATOL: float = 1e-4
+"""Radians: the highest sun near the June solstice is < 1e-5 rad off the meridian (the declination
+moves < 1e-4 rad/day), and the noon search's 1e-3 s moves the azimuth by ~2e-7 rad; mirrored times an
+hour either side share the same bound."""
+
+MIRROR_ZENITH_ATOL: float = 1e-5
+"""Radians: the zenith an hour before and after the highest sun differs only by the declination's
+drift over those 2 h (< 1e-4 rad/day near the solstice: < 1e-5 rad)."""
+
+SUNRISE_ZENITH_ATOL_DEG: float = 1e-3
+"""The sunrise search stops within 0.01 s; the sun climbs at most 15 deg/h = 0.0042 deg/s, so the
+apparent zenith is 90 deg within 4e-5 deg; the bound leaves room for the refraction's kink there."""
+
+SUNRISE_AZIMUTH_ATOL_DEG: float = 0.27
+"""The sun rises 0.575 / tan 50 = 0.48 deg North of East on the equinox day at 40 N; its declination,
+|delta| < 0.2 deg that day, moves the rising point by < 0.2 / cos 40 = 0.26 deg."""
+
+HORIZON_DEPRESSION_ATOL_DEG: float = 0.01
+"""Geometric zenith at apparent sunrise, 90.575 deg: NOAA's horizon refraction at h = -0.575 deg is
+2069.7" = 0.5749 deg, so 90.575 holds to 1e-4 deg; 0.01 deg leaves room for the search's instant."""
+
+REFRACTION_FORMULA_RTOL: float = 1e-9
+"""NOAA's three-term refraction typed here vs skysh.sun's, from the same geometric elevation: the same
+terms in degrees and radians, rounding only (relative to 69.4")."""
+
+ANGLE_ATOL: float = 1e-15
+"""compass_to_frame / frame_to_compass of one angle (the table's multiples of pi/4, one round trip of
+a sun azimuth): pi/2 - a reduced into its range, one or two roundings of values <= 2 pi (ulp(2 pi) =
+8.9e-16)."""
+
+ROUND_TRIP_ATOL: float = 1e-12
+"""frame_to_compass(compass_to_frame(a)) against a mod 2 pi, for |a| <= 4 pi: two subtractions and two
+reductions, a few ulp of 4 pi (1.8e-15 each); compared through exp(1j x) to ignore whole turns."""
+
 
 def _min_zenith_time(lat: float, lon: float, start: dt.datetime, end: dt.datetime) -> dt.datetime:
     """Time of the smallest geometric zenith in [start, end] (solar noon), by golden-section search."""
@@ -97,7 +142,7 @@ class TestEphemeris:
 
     def test_julian_century(self) -> None:
         # Meeus example 25.a: T = -0.072183436.
-        assert sun.ephemeris(self.WHEN).julian_century == pytest.approx(-0.072183436, abs=5e-10)
+        assert sun.ephemeris(self.WHEN).julian_century == pytest.approx(-0.072183436, abs=MEEUS_T_ATOL)
 
     def test_meeus_25a(self) -> None:
         e = sun.ephemeris(self.WHEN)
@@ -115,7 +160,7 @@ class TestEphemeris:
         # Meeus example 28.b (eq. 28.3, same date): E = +0.059825 rad = 13m 42.7s.
         assert e.equation_of_time == pytest.approx(0.059825, abs=EOT_TOL_RAD)
         minutes = e.equation_of_time * 720.0 / math.pi
-        assert minutes == pytest.approx(13.0 + 42.7 / 60.0, abs=0.05 / 60.0 + EOT_TOL_RAD * 720.0 / math.pi)
+        assert minutes == pytest.approx(13.0 + 42.7 / 60.0, abs=EOT_PRINTED_S / 60.0 + EOT_TOL_RAD * 720.0 / math.pi)
 
     def test_spa_example_declination(self) -> None:
         # Reda & Andreas, NREL/TP-560-34302, A.5: 2003-10-17 12:30:30 at UTC-7 gives the
@@ -167,7 +212,7 @@ class TestPosition:
         assert 90.0 - math.degrees(zenith) == pytest.approx(90.0 - 40.0 + obliquity, abs=LOW_ACCURACY_TOL_DEG)
         # Refraction at 73.4 deg elevation: NOAA's 58.1"/tan(h) - ... = 17.4" = 0.0048 deg.
         refracted = sun.position(40.0, -105.0, noon).sun_zenith
-        assert math.degrees(zenith - refracted) == pytest.approx(0.0048, abs=2e-4)
+        assert math.degrees(zenith - refracted) == pytest.approx(0.0048, abs=REFRACTION_ATOL_DEG)
 
     @pytest.mark.parametrize(("lat", "lon", "expected"), [(40.0, -105.0, -math.pi / 2), (-33.87, 151.21, math.pi / 2)])
     def test_noon_due_south_or_north(self, lat: float, lon: float, expected: float) -> None:
@@ -181,12 +226,12 @@ class TestPosition:
         utc_noon = day + dt.timedelta(hours=12.0 - lon / 15.0)
         noon = _min_zenith_time(lat, lon, utc_noon - dt.timedelta(hours=1), utc_noon + dt.timedelta(hours=1))
         _, azimuth = sun.position(lat, lon, noon)
-        assert float(azimuth) == pytest.approx(expected, abs=1e-4)
+        assert float(azimuth) == pytest.approx(expected, abs=NOON_AZIMUTH_ATOL)
         # Symmetric times around noon mirror the azimuth about the meridian and keep the zenith.
         morning = sun.position(lat, lon, noon - dt.timedelta(hours=1))
         afternoon = sun.position(lat, lon, noon + dt.timedelta(hours=1))
-        assert float(morning.sun_azimuth - expected) == pytest.approx(-(afternoon.sun_azimuth - expected), abs=1e-4)
-        assert float(morning.sun_zenith) == pytest.approx(float(afternoon.sun_zenith), abs=1e-5)
+        assert float(morning.sun_azimuth - expected) == pytest.approx(-(afternoon.sun_azimuth - expected), abs=NOON_AZIMUTH_ATOL)
+        assert float(morning.sun_zenith) == pytest.approx(float(afternoon.sun_zenith), abs=MIRROR_ZENITH_ATOL)
         if lat > 0:  # morning: South-East, between +X (0) and -Y (-pi/2); afternoon South-West
             assert -math.pi / 2 < morning.sun_azimuth < 0.0
             assert afternoon.sun_azimuth < -math.pi / 2
@@ -208,12 +253,12 @@ class TestPosition:
 
         sunrise = _first_time(risen, day + dt.timedelta(hours=5), day + dt.timedelta(hours=7))
         zenith, azimuth = sun.position(lat, lon, sunrise)
-        assert math.degrees(zenith) == pytest.approx(90.0, abs=1e-3)
+        assert math.degrees(zenith) == pytest.approx(90.0, abs=SUNRISE_ZENITH_ATOL_DEG)
         shift = 0.575 / math.tan(math.radians(50.0))
-        assert math.degrees(azimuth) == pytest.approx(shift, abs=0.27)
+        assert math.degrees(azimuth) == pytest.approx(shift, abs=SUNRISE_AZIMUTH_ATOL_DEG)
         # Geometrically the sun is then 0.575 deg below the horizon.
         geometric = sun.position_unchecked(lat, lon, sunrise, refraction=False)
-        assert math.degrees(geometric.sun_zenith) == pytest.approx(90.575, abs=0.01)
+        assert math.degrees(geometric.sun_zenith) == pytest.approx(90.575, abs=HORIZON_DEPRESSION_ATOL_DEG)
         # An hour later it is higher and further round towards the South (-Y).
         later = sun.position(lat, lon, sunrise + dt.timedelta(hours=1))
         assert later.sun_zenith < zenith and later.sun_azimuth < 0.0
@@ -232,7 +277,7 @@ class TestPosition:
         # NOAA: 58.1"/tan h - 0.07"/tan^3 h + 0.000086"/tan^5 h at h = 39.87 deg = 69.4" = 0.0193 deg.
         h = math.radians(90.0 - math.degrees(geometric.sun_zenith))
         expected = (58.1 / math.tan(h) - 0.07 / math.tan(h) ** 3 + 0.000086 / math.tan(h) ** 5) / 3600.0
-        assert math.degrees(geometric.sun_zenith - apparent.sun_zenith) == pytest.approx(expected, rel=1e-9)
+        assert math.degrees(geometric.sun_zenith - apparent.sun_zenith) == pytest.approx(expected, rel=REFRACTION_FORMULA_RTOL)
         assert apparent.sun_azimuth == geometric.sun_azimuth
         with pytest.raises(TypeError, match="refraction"):
             sun.position(self.SPA_LAT, self.SPA_LON, self.SPA_WHEN, refraction="yes")  # type: ignore[arg-type]
@@ -300,7 +345,7 @@ class TestPosition:
             assert np.isfinite(zenith) and -math.pi < azimuth <= math.pi
         # North Pole at midsummer: elevation = declination (23.44 deg, + refraction 0.04 deg).
         zenith, _ = sun.position(90.0, 0.0, "2024-06-21T12:00:00Z", refraction=False)
-        assert 90.0 - math.degrees(zenith) == pytest.approx(23.44, abs=0.01)
+        assert 90.0 - math.degrees(zenith) == pytest.approx(23.44, abs=LOW_ACCURACY_TOL_DEG)
 
 
 class TestAzimuthConversion:
@@ -318,8 +363,8 @@ class TestAzimuthConversion:
 
     def test_table(self) -> None:
         for compass, frame in self.TABLE:
-            assert float(sun.compass_to_frame(compass)) == pytest.approx(frame, abs=1e-15)
-            assert float(sun.frame_to_compass(frame)) == pytest.approx(compass, abs=1e-15)
+            assert float(sun.compass_to_frame(compass)) == pytest.approx(frame, abs=ANGLE_ATOL)
+            assert float(sun.frame_to_compass(frame)) == pytest.approx(compass, abs=ANGLE_ATOL)
 
     def test_ranges_and_round_trip(self) -> None:
         angles = np.linspace(-4 * math.pi, 4 * math.pi, 1001).reshape(7, 11, 13)
@@ -329,7 +374,7 @@ class TestAzimuthConversion:
         assert np.all((frame > -math.pi) & (frame <= math.pi))
         assert np.all((compass >= 0.0) & (compass < 2 * math.pi))
         back = sun.frame_to_compass(sun.compass_to_frame(angles))
-        assert np.allclose(np.angle(np.exp(1j * (back - angles))), 0.0, atol=1e-12)
+        assert np.allclose(np.angle(np.exp(1j * (back - angles))), 0.0, rtol=0, atol=ROUND_TRIP_ATOL)
         assert float(sun.compass_to_frame(-math.pi / 2)) == math.pi  # West: +pi, never -pi
 
     def test_matches_position(self) -> None:
@@ -337,7 +382,7 @@ class TestAzimuthConversion:
         _zenith, azimuth = sun.position(40.0, -105.0, "2024-06-21T09:00:00-06:00")
         compass = sun.frame_to_compass(azimuth)
         assert 0.0 < compass < math.pi  # a summer morning: the sun is in the East
-        assert float(sun.compass_to_frame(compass)) == pytest.approx(float(azimuth), abs=1e-15)
+        assert float(sun.compass_to_frame(compass)) == pytest.approx(float(azimuth), abs=ANGLE_ATOL)
 
     @pytest.mark.parametrize("bad", [math.nan, math.inf, "north"])
     def test_non_finite_refused(self, bad: object) -> None:

@@ -9,45 +9,20 @@ coefficient file as ``skysh/data/preetham_sh.npz`` (byte-identical to
 package, and nothing outside ``skysh/`` and the dist-info. Installing the
 wheel is tested elsewhere (``tests/test_install.py``).
 
-The copy leaves out ``build/``, ``dist/`` and ``*.egg-info`` so that stale
-build products of the working tree cannot leak into the wheel, and so the test
-writes nothing into the repository.
+The wheel is conftest's session fixture ``wheel`` (shared with
+``tests/test_install.py``): its copy of the tree leaves out ``build/``, ``dist/``
+and ``*.egg-info`` so that stale build products of the working tree cannot leak
+into the wheel, and so the test writes nothing into the repository.
 """
 
 from __future__ import annotations
 
-import shutil
-import subprocess
-import sys
 import zipfile
 from pathlib import Path
 
-import pytest
+from conftest import ROOT
 
 from skysh import coefficient_file
-
-ROOT = Path(__file__).resolve().parent.parent
-
-IGNORED = shutil.ignore_patterns(
-    ".git", "build", "dist", "*.egg-info", "__pycache__", ".pytest_cache", ".hypothesis", "*.pyc", "out", "report*"
-)
-
-
-@pytest.fixture(scope="module")
-def wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    base = tmp_path_factory.mktemp("wheel")
-    source = base / "src"
-    shutil.copytree(ROOT, source, ignore=IGNORED)
-    out = base / "dist"
-    result = subprocess.run(
-        [sys.executable, "-m", "pip", "wheel", str(source), "--no-deps", "--no-build-isolation", "--no-index",
-         "-q", "-w", str(out)],
-        capture_output=True, text=True, timeout=300,
-    )
-    assert result.returncode == 0, result.stdout + result.stderr
-    wheels = sorted(out.glob("skysh-*.whl"))
-    assert len(wheels) == 1, wheels
-    return wheels[0]
 
 
 def _names(wheel: Path) -> list[str]:

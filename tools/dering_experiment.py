@@ -39,6 +39,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from studies.seed_bound import min_bound
 
 from skysh import SkySH, dering, sh, shmin
 
@@ -109,12 +110,12 @@ def table_finding() -> list[dict[str, Any]]:
 def bound_conservativeness(sets: dict[str, NDArray], rng: np.random.Generator, n_random: int) -> list[dict[str, Any]]:
     """``exact_min - min_bound`` per set (irradiance of radiance SH (n, 9, C)) and for random functions."""
     rand = rng.normal(size=(n_random, 9, 1)) * rng.uniform(0.0, 2.0, (n_random, 9, 1)) ** 2
-    gap = (dering.exact_min(rand) - dering.min_bound(rand)) / np.abs(rand).max(axis=-2)
+    gap = (dering.exact_min(rand) - min_bound(rand)) / np.abs(rand).max(axis=-2)
     rows = [{"experiment": "bound", "set": "random (unit = max |coeff|)", "n": int(gap.size),
              "violations": int((gap < -1e-12).sum()), **stats(gap)}]
     for name, c in sets.items():
         irr = sh.irradiance(c)
-        gap = (dering.exact_min(irr) - dering.min_bound(irr)) / np.abs(mean_value(irr))
+        gap = (dering.exact_min(irr) - min_bound(irr)) / np.abs(mean_value(irr))
         rows.append({"experiment": "bound", "set": f"{name} (unit = mean)", "n": int(gap.size),
                      "violations": int((gap < -1e-12).sum()), **stats(gap)})
     return rows
@@ -135,9 +136,10 @@ def secular_problems(rng: np.random.Generator, n: int) -> dict[str, tuple[NDArra
 
 def dual_after(lam: NDArray, a: NDArray, steps: int) -> NDArray:
     """The module's dual value for c = 0 after its steps: proven start, one step, estimates, ``steps``."""
-    d, x = shmin._prefix(lam, a)
-    x = shmin._newton(d, a, shmin._candidates(d, a, shmin._newton(d, a, x, 1)), steps)
-    return shmin._dual(np.zeros(len(lam)), lam, d, a, x)
+    d = lam - lam[..., :1]
+    x = shmin.prefix_bound(d, a)
+    x = shmin.newton(d, a, shmin.cluster_bounds(d, a, shmin.newton(d, a, x, 1)), steps)
+    return shmin.dual(np.zeros(len(lam)), lam, d, a, x)
 
 
 def secular(rng: np.random.Generator, n: int) -> list[dict[str, Any]]:
@@ -155,7 +157,7 @@ def secular(rng: np.random.Generator, n: int) -> list[dict[str, Any]]:
         row = {"experiment": "secular", "problems": name, "n": n}
         for steps in (1, 2, 3, 4, 5, 64):
             row[f"{steps} steps: worst below truth"] = float(((truth - dual_after(lam, a, steps)) / size).max())
-        row["shipped: worst above truth"] = float(((dual_after(lam, a, shmin._NEWTON_STEPS) - truth) / size).max())
+        row["shipped: worst above truth"] = float(((dual_after(lam, a, shmin.NEWTON_STEPS) - truth) / size).max())
         rows.append(row)
     return rows
 
@@ -163,7 +165,7 @@ def secular(rng: np.random.Generator, n: int) -> list[dict[str, Any]]:
 def certificate(rng: np.random.Generator, n: int) -> list[dict[str, Any]]:
     from scipy.spatial import ConvexHull
 
-    p = shmin._fibonacci(shmin.DIRECTIONS)
+    p = shmin.fibonacci(shmin.DIRECTIONS)
     tri = p[ConvexHull(p).simplices]
     normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     normal /= np.linalg.norm(normal, axis=1, keepdims=True)
@@ -182,18 +184,22 @@ def certificate(rng: np.random.Generator, n: int) -> list[dict[str, Any]]:
             rows.append({"experiment": "certificate", "bands": bands, "set": name, "n": int(slack.size),
                          "slack / max|c| mean": float(slack.mean()), "worst": float(slack.max()),
                          "negative slack (must be 0)": int((slack < 0).sum()), "ms per function": 1e3 * seconds})
-        last = dering.window_table(bands)[-1][dering._L_OF[: bands * bands], None]
+        last = dering.window_table(bands)[-1][sh.band_of_index(bands), None]
         irr = sh.irradiance(lights(n // 4, rng, bands) * last)
         norms = [np.linalg.norm(irr[:, l * l:(l + 1) ** 2], axis=1) * math.sqrt((2 * l + 1) / (4 * math.pi))
                  for l in range(bands)]
         k2 = sum(l * l * x for l, x in enumerate(norms)) / np.abs(mean_value(irr))
         ell = np.arange(bands)
-        analytic = max(float((ell**2 * (2 * ell + 1) * np.abs(dering._KERNELS[tg][:bands]) / dering._KERNELS[tg][0]
+        analytic = max(float((ell**2 * (2 * ell + 1) * np.abs(dering.KERNELS[tg][:bands]) / dering.KERNELS[tg][0]
                               * dering.window_table(bands, tg)[-1]).sum()) for tg in dering.DERING_TARGETS)
+        def slack(level: int, analytic: float = analytic) -> float:  # K r^2 / 2 at a level's half-diagonal
+            return analytic * (math.sqrt(2) * shmin.COVER_RADIUS / 2**level) ** 2 / 2
+
         rows.append({"experiment": "certificate", "bands": bands, "set": "last row, lights",
                      "curvature bound / mean, worst": float(k2.max()), "any non-negative light (either target)": analytic,
-                     "level-3 slack / mean, any light": analytic * (math.sqrt(2) * shmin.COVER_RADIUS / 8) ** 2 / 2,
-                     "CERTIFIED_MARGIN": dering.CERTIFIED_MARGIN})
+                     "final-level slack / mean, any light": slack(shmin.LEVELS),
+                     "levels until below the margin": next(k for k in range(64) if slack(k) < dering.CERTIFIED_MARGIN),
+                     "LEVELS": shmin.LEVELS, "CERTIFIED_MARGIN": dering.CERTIFIED_MARGIN})
     return rows
 
 
@@ -210,11 +216,12 @@ def excess(sets: dict[str, NDArray]) -> list[dict[str, Any]]:
             mid = 0.5 * (lo + hi)
             i = np.minimum(np.floor(mid).astype(int), len(table) - 2)
             s = table[i] + (mid - i)[:, None] * (table[i + 1] - table[i])
-            ok = (dering.exact_min(sh.irradiance(c * s[:, dering._L_OF[:9], None])) >= 0).all(-1)
+            ok = (dering.exact_min(sh.irradiance(c * s[:, sh.band_of_index(3), None])) >= 0).all(-1)
             lo, hi = np.where(ok, lo, mid), np.where(ok, mid, hi)
         keep = ~failed & (row > 0)
         base = sh.irradiance(c)
-        change = np.sqrt(((sh.irradiance(c * scales[:, dering._L_OF[:9], None]) - base) ** 2).sum(1) / (base ** 2).sum(1)).max(-1)
+        windowed = sh.irradiance(c * scales[:, sh.band_of_index(3), None])
+        change = np.sqrt(((windowed - base) ** 2).sum(1) / (base ** 2).sum(1)).max(-1)
         rows.append({"experiment": "excess", "set": name, "windowed": int(keep.sum()), "n": len(c),
                      "rows beyond the least continuous position, mean": float((row - hi)[keep].mean()) if keep.any() else 0.0,
                      "worst": float((row - hi)[keep].max()) if keep.any() else 0.0,

@@ -5,14 +5,21 @@ Fit the Preetham sky's SH coefficients and write the coefficient file.
 Projects the sky over a (sun zenith, turbidity) grid (in parallel, with a
 progress bar), fits every coefficient with a 2D Chebyshev polynomial by
 weighted least squares (skysh.fit), fits the sun's direct illuminance
-(skysh.solar) as ln XYZ in the same run (skysh.fit.build_sun), measures both
-on held-out points and writes a versioned file (skysh.coefficient_file, format
-version 3). The logic lives in the package; this is the command line.
+(skysh.solar) as ln XYZ in the same run (skysh.fit.build_sun), and the
+sky's certified non-negative 3-band irradiance (skysh.irradiance_fit.build_table:
+a convex problem per grid point, the sky table's polynomial, the exact minimum
+at 12,004 held-out points; needs the tools extra, cvxpy), measures them on
+held-out points and writes a versioned file (skysh.coefficient_file, format
+version 4). The logic lives in the package; this is the command line.
 
     python tools/fit_sky.py --quick --out /tmp/q.npz
     python tools/fit_sky.py --tolerance 1e-3 --out /tmp/small.npz
     python tools/fit_sky.py --compare-scalings --out /tmp/x.npz
     python tools/fit_sky.py --out data/preetham_sh.npz --force   # regenerate the shipped file
+
+The shipped file: ``OPENBLAS_NUM_THREADS=1 python tools/fit_sky.py --out
+data/preetham_sh.npz --force --no-progress --workers 2`` (most of its time goes to the
+irradiance's 1,316 convex problems; it prints its wall time; same command and tree, same bytes).
 
 ``--out`` is required: there is no default file. The shipped coefficient file
 (``data/preetham_sh.npz`` of the source tree, ``skysh/data/preetham_sh.npz`` of
@@ -32,7 +39,7 @@ import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
-from typing import NoReturn
+from typing import Any, NoReturn
 
 # One BLAS thread per process: the pool already uses every core, and oversubscribed
 # OpenBLAS threads made small least-squares solves 50x slower on a loaded machine.
@@ -43,7 +50,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import skysh  # noqa: E402
-from skysh import coefficient_file, fit, sh, sunlight  # noqa: E402
+from skysh import coefficient_file, fit, irradiance_fit, sh, sunlight  # noqa: E402
 from skysh._version import __version__  # noqa: E402
 
 QUICK_GRID = (16, 8)
@@ -54,6 +61,8 @@ MAX_JOBS: int = 256
 """Largest --jobs."""
 SUN_GOAL: float = 1e-4
 """Issue 15's goal for the sun table: worst held-out relative error (skysh.fit.SUN_ERROR_DEFINITION)."""
+QUICK_IRRADIANCE_HELD_OUT: tuple[int, int] = (8, 1)
+"""--quick: exact solves for the irradiance table's fit error (random points, per edge; plus the corners)."""
 MAX_SAMPLES: int = 1_000_000
 """Largest --samples: a projection holds about 55 floats per sample at 7 bands (440 MB at the bound) per worker."""
 
@@ -152,7 +161,25 @@ def print_sun(sky_table: coefficient_file.SkyTable) -> None:
     print(json.dumps({"fit": "sun", "degrees": block["degrees"], **errors}))
 
 
-def main(argv: list[str] | None = None) -> int:
+def print_irradiance(sky_table: coefficient_file.SkyTable, seconds: float) -> None:
+    """The irradiance table's objective, fit error and certificate, as recorded in the metadata (tables.irradiance)."""
+    block = sky_table.metadata["tables"]["irradiance"]
+    objective, fit_error, proof = block["objective"], block["fit_error"], block["nonnegativity"]
+    degrees = sky_table.tables["irradiance"].degrees[0].tolist()
+    print(f"\nirradiance table ({objective['method']}, margin {block['margin']:g}, u'v' <= {objective['chroma']}; degrees "
+          f"{degrees}, grid {block['grid']['shape']}, condition number {block['condition_number']:.3g}; solves and "
+          f"checks {seconds:.0f} s wall)")
+    print("| irradiance table | worst | median | points | certificate: lowest minimum / mean | points negative |")
+    print("|---|---|---|---|---|---|")
+    print(f"| fit error vs exact optima (max over the sphere / mean) | {fit_error['worst']:.3e} | {fit_error['median']:.3e} "
+          f"| {fit_error['points']} | {proof['lowest']:.3e} at {proof['lowest_at']} ({proof['points']} points) | "
+          f"{proof['negative']} |")
+    print(json.dumps({"fit": "irradiance", "margin": block["margin"], "objective": objective, "fit_error": fit_error,
+                      "nonnegativity": proof}))
+
+
+def build_parser() -> OneLineParser:
+    """The command line (``--workers`` is ``--jobs``)."""
     parser = OneLineParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--out", type=Path, default=None, help="output .npz (required; the shipped file only with --force)")
     parser.add_argument("--force", action="store_true", help="allow --out to name the shipped data/preetham_sh.npz")
@@ -171,10 +198,32 @@ def main(argv: list[str] | None = None) -> int:
                         "validation E_mean stays within this fraction (e.g. 1e-3)")
     parser.add_argument("--quick", action="store_true", help=f"tiny grid {QUICK_GRID} and {QUICK_HELD_OUT} held-out points (for "
                         "tests)")
-    parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="worker processes (default: all cores)")
+    parser.add_argument("--jobs", "--workers", type=int, default=os.cpu_count() or 1, help="worker processes (default: all "
+                        "cores)")
     parser.add_argument("--compare-scalings", action="store_true", help="also print the held-out error of the fit's variable and "
                         "scale choices")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    return parser
+
+
+def with_irradiance(parser: argparse.ArgumentParser, args: argparse.Namespace, sky_table: coefficient_file.SkyTable,
+                    grid: tuple[int, int], mapper: Any) -> coefficient_file.SkyTable:
+    """``sky_table`` with the irradiance table of :func:`skysh.irradiance_fit.build_table` and its block (exit 2 if
+    it is not certified non-negative)."""
+    held_out = QUICK_IRRADIANCE_HELD_OUT if args.quick else irradiance_fit.FIT_ERROR_POINTS
+    try:
+        table, degrees, block = irradiance_fit.build_table(grid, args.degrees, irradiance_fit.RECOMMENDED,
+                                                           args.colourspace, mapper, held_out)
+    except RuntimeError as error:  # not certified non-negative: no file
+        parser.error(f"the irradiance table: {error}")
+    return coefficient_file.SkyTable(
+        sky_table.table, sky_table.degrees,
+        {**sky_table.metadata, "tables": {**sky_table.metadata["tables"], "irradiance": block}},
+        {**sky_table.tables, "irradiance": coefficient_file.NamedTable(table, degrees)})
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
     args = parser.parse_args(argv)
     check_arguments(parser, args)
     grid = args.grid or (QUICK_GRID if args.quick else (48, 24))
@@ -186,7 +235,9 @@ def main(argv: list[str] | None = None) -> int:
 
     from tqdm import tqdm
 
+    irradiance_held_out = QUICK_IRRADIANCE_HELD_OUT if args.quick else irradiance_fit.FIT_ERROR_POINTS
     total = grid[0] * grid[1] + settings.held_out + 4 + (settings.validation + 4 + 24 if args.tolerance else 0)
+    total += grid[0] * grid[1] + irradiance_held_out[0] + 4 + 4 * irradiance_held_out[1]
     start = time.perf_counter()
     with ProcessPoolExecutor(args.jobs) as pool:
         bar = tqdm(total=total, desc="projecting the sky", unit="sky", disable=args.no_progress, file=sys.stderr)
@@ -202,6 +253,9 @@ def main(argv: list[str] | None = None) -> int:
             "command": "python tools/fit_sky.py " + " ".join(argv if argv is not None else sys.argv[1:]),
         }
         sky_table, report, samples = fit.build(settings, tolerance=args.tolerance, mapper=mapper, provenance=provenance)
+        bar.set_description("the irradiance's convex problems")
+        irradiance_start = time.perf_counter()
+        sky_table = with_irradiance(parser, args, sky_table, grid, mapper)
         bar.close()
     try:
         path = coefficient_file.write(args.out, sky_table)
@@ -220,6 +274,7 @@ def main(argv: list[str] | None = None) -> int:
               f"{row['dc_worst']:.2e} |")
     print(json.dumps({"fit": "summary", "elapsed_s": elapsed, "degrees": sky_table.degrees.tolist(), **report}))
     print_sun(sky_table)
+    print_irradiance(sky_table, time.perf_counter() - irradiance_start)
     if args.compare_scalings:
         print("\nform of the fit (same projections, same held-out points):")
         print(f"| form | condition | worst E_mean 3 bands | worst E_mean {args.bands} bands |")

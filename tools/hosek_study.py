@@ -90,7 +90,7 @@ def truth(ts: np.ndarray, t: np.ndarray, a: np.ndarray, jobs: int) -> tuple[np.n
 
 def denominator(lmin: np.ndarray, coeffs: np.ndarray) -> np.ndarray:
     """L_min per channel: skysh.fit's floor, then MEAN_FLOOR x the hemisphere's mean luminance."""
-    mean_y = (coeffs[:, 0] @ hosek._luminance_row("sRGB")) / math.sqrt(math.pi)  # DC = sqrt(pi) x mean
+    mean_y = (coeffs[:, 0] @ hosek.luminance_row("sRGB")) / math.sqrt(math.pi)  # DC = sqrt(pi) x mean
     return np.maximum(fit.error_denominator(lmin), MEAN_FLOOR * mean_y[:, None])
 
 

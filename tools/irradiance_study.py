@@ -8,8 +8,9 @@ Prints, from the package's own code (:mod:`skysh.irradiance_fit`):
 2.  over 42 skies (sun zenith 0-90 degrees, 1-degree steps near the horizon; turbidity
     2.5, 4, 6) against the true irradiance (64 bands) on 12,168 normals: the worst
     error (over normals and RGB, relative to each channel's mean irradiance; worst
-    sky / median sky), the lowest value (exact minimum over the sphere), and the
-    chromaticity error (CIE 1976 u'v' distance per normal) of every method;
+    sky / median sky), the lowest value (exact minimum over the sphere,
+    :func:`skysh.dering.exact_min`), and the chromaticity error (CIE 1976 u'v'
+    distance per normal) of every method;
 3.  how well each constrained optimum tabulates: fitted over the 48 x 24 Chebyshev
     grid with the sky table's polynomial (13, 7), its held-out fit error (exact
     optima at held-out points) and its exact minimum at >= 10^4 held-out points;
@@ -19,16 +20,23 @@ the sun zenith per method). Expensive results are cached under ``--out``/cache.
 
     python tools/irradiance_study.py --out build/irradiance_study --workers 2
     python tools/irradiance_study.py --out /tmp/irr --quick        # small grid, few skies
+
+The functions are also the error report's section 11 (``tools/report/s11_irradiance_table.py``):
+:func:`sky_points`, :class:`Evaluator` (truth and measures), :func:`method_coefficients`
+(every method of the issue's table), :func:`continuous_dering`, :func:`grid_solution`,
+:func:`fit_grid`, :func:`nonnegative_check`, :func:`runtime_has_irradiance_table`,
+:func:`row_cells` and :func:`chart_figure`.
 """
 
 from __future__ import annotations
 
 import argparse
+import inspect
 import math
 import os
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -37,13 +45,18 @@ for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_name, "1")  # one BLAS thread per process (see tools/fit_sky.py)
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
 from numpy.typing import NDArray  # noqa: E402
 
 from skysh import fit, sh  # noqa: E402
 from skysh import irradiance_fit as irf  # noqa: E402
+from skysh.dering import LINEAR_ATTENUATION, SEED_WINDOW_SIZES, exact_min, sinc4_window  # noqa: E402
+
+Log = Callable[[str], None]
+Mapper = Callable[[Callable, Iterable], Iterable]
 
 SKY_ZENITHS_DEG: tuple[float, ...] = (0, 15, 30, 45, 60, 70, 75, 80, 85, 86, 87, 88, 89, 90)
 """Sun zenith angles of the study's skies, degrees: 1-degree steps next to the horizon."""
@@ -64,11 +77,37 @@ HELD_OUT_SOLVES: int = 128
 """Random held-out points (plus corners and 8 per edge) solved exactly for the fit error."""
 NONNEG_POINTS: int = 10_000
 """Random held-out points (plus corners and 500 per edge) for the exact-minimum check."""
+NONNEG_PER_EDGE: int = 500
+"""Held-out points per domain edge of the exact-minimum check."""
 SEED: int = 2018
 """Seed of the held-out points (different from the sky table's 2008)."""
+NONNEG_SEED: int = SEED + 7
+"""Seed of the exact-minimum check's points."""
 NEGATIVE_TOL: float = 1e-8
 """A minimum above -1e-8 of the mean counts as non-negative: the solver's feasibility
 tolerance (1e-9, on the scaled problem) plus rounding, far below any visible value."""
+DEFAULT_CACHE: Path = ROOT / "build" / "irradiance_study" / "cache"
+"""The study's cache directory (``--out build/irradiance_study``); ``full`` and ``quick`` below it."""
+BASIS_CHUNK: int = 2048
+"""Normals per block when the 64-band basis is evaluated (2048 x 4096 floats: 64 MB)."""
+ISSUE_OBJECTIVES: tuple[irf.Objective, ...] = (
+    irf.Objective("l2"), irf.Objective("minimax"), irf.Objective("minimax_free"), irf.RECOMMENDED,
+)
+"""The optima of issue 18's table (L2 and minimax subject to f >= 0, minimax unconstrained) and the
+recommended objective (blend with u'v' <= 0.01 and a 0.1% margin)."""
+PLAIN: str = "plain projection (L2-optimal, unconstrained)"
+"""Name of the first 9 coefficients of the truth (the L2-optimal 3-band irradiance)."""
+RUNTIME_TABLE_OPTION: str = "irradiance_table"
+"""The runtime's keyword choosing the tabulated irradiance (True) or the windowed pipeline (False)."""
+FILE_TABLE: str = "irradiance"
+"""Name of the tabulated irradiance in the coefficient file's tables."""
+DERING_BISECTION_STEPS: int = 60
+"""Bisection steps in log w over [5.6, 1e4] of :func:`continuous_dering`: the bracket ends
+7.4 / 2^60 apart in log w, far below any change of the window."""
+LARGEST_WINDOW: float = 1e4
+"""Upper end of the window sizes bisected by :func:`continuous_dering` (sinc^4 at l = 2 is 1 - 5e-7)."""
+_L_OF: NDArray[np.intp] = np.repeat(np.arange(3), 2 * np.arange(3) + 1)
+"""Band l of each of the 9 coefficients."""
 
 
 def progress(message: str) -> None:
@@ -79,52 +118,90 @@ def pct(x: float, digits: int = 3) -> str:
     return f"{100.0 * x:.{digits}g}%"
 
 
-def cached(path: Path, compute: Callable[[], dict[str, NDArray]]) -> dict[str, NDArray]:
-    """Load ``path`` (npz) if it exists, else compute, save and return."""
-    if path.exists():
+def cached(path: Path | None, compute: Callable[[], dict[str, NDArray]]) -> dict[str, NDArray]:
+    """Load ``path`` (npz) if it exists, else compute, save (unless ``path`` is None) and return."""
+    if path is not None and path.exists():
         with np.load(path) as data:
             return {k: data[k] for k in data.files}
     result = compute()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    np.savez(path, **result)
+    if path is not None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        np.savez(path, **result)  # type: ignore[arg-type]  # numpy stub: the first keyword is allow_pickle
     return result
 
 
-class Evaluator:
-    """The evaluation normals, their 64-band half basis and the study's skies' truth."""
+def sky_points(zeniths_deg: Iterable[float] = SKY_ZENITHS_DEG,
+               turbidities: Iterable[float] = SKY_TURBIDITIES) -> list[tuple[float, float]]:
+    """(sun zenith in radians, turbidity) of every study sky, zenith-major."""
+    tu = tuple(turbidities)
+    return [(math.radians(z), t) for z in zeniths_deg for t in tu]
 
-    def __init__(self, cache: Path, skies: list[tuple[float, float]]) -> None:
-        self.normals, self.weights = sh.quadrature_rule(EVAL_THETA_NODES)
-        self.skies = skies
+
+def sky_arrays(skies: list[tuple[float, float]]) -> tuple[NDArray, NDArray]:
+    """The skies as two (S,) arrays: sun zenith (radians) and turbidity."""
+    ts, tu = zip(*skies)
+    return np.array(ts, dtype=np.float64), np.array(tu, dtype=np.float64)
+
+
+def truth_point(job: tuple[float, float, int, int | None]) -> NDArray:
+    """The true irradiance (bands^2, 3) of one (sun zenith, turbidity, bands, zenith nodes per panel or None for
+    the projection's default); top level, for process pools."""
+    ts, tu, bands, nodes = job
+    return irf.true_irradiance(ts, tu, bands, nodes)
+
+
+def m_nonnegative_rows(bands: int) -> NDArray[np.intp]:
+    """Flat indices of the m >= 0 coefficients of ``bands`` bands (the others are zero: sun at azimuth 0)."""
+    return np.array([i for i in range(bands * bands) if sh.lm(i)[1] >= 0], dtype=np.intp)
+
+
+class Evaluator:
+    """The evaluation normals, the skies' true irradiance (coefficients and values) and the measures."""
+
+    def __init__(self, skies: list[tuple[float, float]], cache: Path | None = None, truth_bands: int = STUDY_TRUTH_BANDS,
+                 theta_nodes: int = EVAL_THETA_NODES, mapper: Mapper = map, log: Log = progress,
+                 truth_nodes: int | None = None) -> None:
+        self.normals, self.weights = sh.quadrature_rule(theta_nodes)
+        self.skies = list(skies)
+        self.truth_bands, self.truth_nodes = truth_bands, truth_nodes
         self.y9 = sh.basis(self.normals, 3)
-        self.rows = np.array([i for i in range(STUDY_TRUTH_BANDS**2) if sh.lm(i)[1] >= 0])
-        self.truth = cached(cache / f"skies_{len(skies)}_B{STUDY_TRUTH_BANDS}.npz", self._truth)
+        suffix = "" if theta_nodes == EVAL_THETA_NODES else f"_N{theta_nodes}"
+        suffix += "" if truth_nodes is None else f"_Q{truth_nodes}"
+        path = None if cache is None else cache / f"skies_{len(skies)}_B{truth_bands}{suffix}.npz"
+        self.truth = cached(path, lambda: self.compute_truth(mapper, log))
         self.mean = irf.Y00 * self.truth["coeffs"][:, 0, :]  # (S, 3) true mean irradiance
 
     def values(self, coeffs: NDArray) -> NDArray:
-        """Any-band coefficients (K, 3) with zero m < 0 rows at the normals (M, 3), in chunks."""
-        bands = math.isqrt(coeffs.shape[0])
-        rows = np.array([i for i in range(bands * bands) if sh.lm(i)[1] >= 0])
-        out = np.empty((self.normals.shape[0], 3))
-        for start in range(0, self.normals.shape[0], 2048):
-            out[start : start + 2048] = sh.basis(self.normals[start : start + 2048], bands)[:, rows] @ coeffs[rows]
-        return out
+        """Any-band coefficients (K, 3) or (S, K, 3) with zero m < 0 rows at the normals: (M, 3) or (S, M, 3)."""
+        c = np.asarray(coeffs, dtype=np.float64)
+        single = c.ndim == 2
+        c = c[None] if single else c
+        bands = math.isqrt(c.shape[1])
+        rows = m_nonnegative_rows(bands)
+        flat = np.moveaxis(c[:, rows], 1, 0).reshape(rows.size, -1)  # (K', S * 3)
+        out = np.empty((self.normals.shape[0], flat.shape[1]))
+        for start in range(0, self.normals.shape[0], BASIS_CHUNK):
+            block = self.normals[start : start + BASIS_CHUNK]
+            out[start : start + BASIS_CHUNK] = sh.basis(block, bands)[:, rows] @ flat
+        out = out.reshape(-1, c.shape[0], 3).transpose(1, 0, 2)
+        return out[0] if single else out
 
-    def _truth(self) -> dict[str, NDArray]:
-        coeffs, values = [], []
-        for k, (ts, tu) in enumerate(self.skies):
-            progress(f"truth {k + 1}/{len(self.skies)}")
-            c = irf.true_irradiance(ts, tu, STUDY_TRUTH_BANDS, None)
+    def compute_truth(self, mapper: Mapper, log: Log) -> dict[str, NDArray]:
+        """The skies' true irradiance coefficients (S, B^2, 3) and values at the normals (S, M, 3)."""
+        coeffs = []
+        jobs = [(ts, tu, self.truth_bands, self.truth_nodes) for ts, tu in self.skies]
+        for k, c in enumerate(mapper(truth_point, jobs)):
+            log(f"truth {k + 1}/{len(self.skies)}")
             coeffs.append(c)
-            values.append(self.values(c))
-        return {"coeffs": np.stack(coeffs), "values": np.stack(values)}
+        stacked = np.stack(coeffs)
+        return {"coeffs": stacked, "values": self.values(stacked)}
 
     def measure(self, coeffs: NDArray) -> dict[str, NDArray]:
         """Per sky: worst relative error, exact minimum of the mean, worst and median u'v' distance."""
         rec = np.einsum("mk,skc->smc", self.y9, coeffs)
         truth = self.truth["values"]
         error = np.max(np.abs(rec - truth) / self.mean[:, None, :], axis=(1, 2))
-        lowest = np.min(irf.sphere_minimum(coeffs) / self.mean, axis=1)
+        lowest = np.min(exact_min(coeffs) / self.mean, axis=1)
         uv_worst, uv_median, undefined = chroma(rec, truth, self.mean)
         return {"error": error, "lowest": lowest, "uv_worst": uv_worst, "uv_median": uv_median, "undefined": undefined}
 
@@ -175,34 +252,94 @@ def section_convergence(ev: Evaluator) -> None:
           "beyond 64 bands is e(24) (24 / 64)^p with the rate p of the 16 -> 24 step.\n")
 
 
-def runtime_coefficients(skies: list[tuple[float, float]], gibbs: bool) -> NDArray | None:
-    """The runtime's 3-band irradiance (deringed) at the skies, or None (with a note) if the runtime fails."""
-    from skysh.runtime import SkySH
-
-    try:
-        sky = SkySH.load()
-        return np.stack([sky.coefficients(ts, tu, 0.0, bands=3, irradiance=True, gibbs=gibbs, dering=True)
-                         for ts, tu in skies])
-    except Exception as error:  # (another session may be rebuilding the deringing: say so, keep going)
-        print(f"(runtime gibbs={gibbs}, dering=True unavailable: {type(error).__name__}: {error})\n")
-        return None
+# --------------------------------------------------------------------------- #
+# The methods
+# --------------------------------------------------------------------------- #
+def runtime_has_option(sky: Any) -> bool:
+    """Whether ``sky.coefficients`` takes :data:`RUNTIME_TABLE_OPTION` (a runtime that knows the tabulated irradiance)."""
+    return RUNTIME_TABLE_OPTION in inspect.signature(sky.coefficients).parameters
 
 
-def solve_skies(ev: Evaluator, objective: irf.Objective) -> NDArray:
-    return np.stack([irf.constrained_coefficients(truth, objective)[0] for truth in ev.truth["coeffs"]])
+def runtime_has_irradiance_table(sky: Any) -> bool:
+    """Whether ``sky`` (a :class:`skysh.SkySH`) evaluates the tabulated irradiance: the option and the file's table."""
+    return runtime_has_option(sky) and FILE_TABLE in sky.table.tables
+
+
+def runtime_coefficients(sky: Any, skies: list[tuple[float, float]], gibbs: bool) -> NDArray:
+    """The runtime's windowed 3-band irradiance (deringed; never the table) at the skies: (S, 9, 3)."""
+    ts, tu = sky_arrays(skies)
+    options = {RUNTIME_TABLE_OPTION: False} if runtime_has_option(sky) else {}
+    return sky.coefficients(ts, tu, 0.0, bands=3, irradiance=True, gibbs=gibbs, dering=True, **options)
+
+
+def runtime_tabulated(sky: Any, sun_zenith: NDArray, turbidity: NDArray) -> NDArray:
+    """The runtime's tabulated 3-band irradiance at (P,) points: (P, 9, 3) (needs :func:`runtime_has_irradiance_table`)."""
+    return sky.coefficients(sun_zenith, turbidity, 0.0, bands=3, irradiance=True, **{RUNTIME_TABLE_OPTION: True})
+
+
+def continuous_window(size: NDArray) -> NDArray:
+    """(S, 3) factors of eq. (6) at window sizes (S,) with the linear ramp of :func:`skysh.dering.window_table`.
+
+    Band 1 is scaled by ``1 - (1 - a) (1 - s2(w)) / (1 - s2(5.6))`` with ``a`` =
+    :data:`skysh.dering.LINEAR_ATTENUATION`: the table's rows for w in its sizes, any w in between.
+    """
+    x = np.arange(3) / np.asarray(size, dtype=np.float64)[:, None]
+    rows = np.where(x < 1.0, np.sinc(x) ** 4, 0.0)
+    last = sinc4_window(SEED_WINDOW_SIZES[-1], 3)
+    rows[:, 1] *= 1.0 - (1.0 - LINEAR_ATTENUATION) * (1.0 - rows[:, 2]) / (1.0 - last[2])
+    return rows
+
+
+def continuous_dering(sky: Any, skies: list[tuple[float, float]], steps: int = DERING_BISECTION_STEPS) -> NDArray:
+    """The runtime's sky (gibbs=False) deringed with the least window of a *continuous* size: irradiance (S, 9, 3).
+
+    The runtime takes the least of the table's 7 rows that makes the irradiance
+    non-negative; here the size w is bisected in [5.6, 1e4] on the exact minimum (one
+    window for all channels, as the runtime): what the deringing gives without the
+    table's steps.
+    """
+    ts, tu = sky_arrays(skies)
+    raw = sky.coefficients(ts, tu, 0.0, bands=3, gibbs=False, dering=False)
+
+    def irradiance(size: NDArray) -> NDArray:
+        return raw * continuous_window(size)[:, _L_OF, None] * irf.LOBE[:, None]
+
+    def nonnegative(size: NDArray) -> NDArray:
+        return np.min(exact_min(irradiance(size)), axis=-1) >= 0.0
+
+    lo, hi = np.full(len(skies), SEED_WINDOW_SIZES[-1]), np.full(len(skies), LARGEST_WINDOW)
+    for _ in range(steps):
+        mid = np.sqrt(lo * hi)
+        good = nonnegative(mid)
+        lo, hi = np.where(good, mid, lo), np.where(good, hi, mid)
+    return irradiance(np.where(nonnegative(np.full(len(skies), np.inf)), np.inf, lo))
+
+
+def solve_job(job: tuple[NDArray, irf.Objective]) -> NDArray:
+    """One sky's constrained optimum (9, 3) from its truth; top level, for process pools."""
+    truth, objective = job
+    return irf.constrained_coefficients(truth, objective)[0]
+
+
+def solve_skies(ev: Evaluator, objective: irf.Objective, mapper: Mapper = map) -> NDArray:
+    """The optimum of ``objective`` at every sky of ``ev`` against its truth: (S, 9, 3)."""
+    return np.stack(list(mapper(solve_job, [(truth, objective) for truth in ev.truth["coeffs"]])))
 
 
 def objective_name(obj: irf.Objective) -> str:
-    """A short label: method, margin, weight (blend), chroma bound."""
+    """A short label: method, margin, weight (blend), chroma bound (and the optimisation sphere if not the default)."""
     name = {"l2": "L2-optimal", "minimax": "minimax", "lp": f"L_{irf.LP_EXPONENT}", "minimax_free": "minimax",
             "blend": f"blend (worst + {obj.weight:g} RMS^2)"}[obj.method]
     if obj.method == "minimax_free":
-        return name + ", unconstrained (the floor of three bands)"
-    name += " subject to non-negative"
-    if obj.margin:
-        name += f" (margin {pct(obj.margin, 2)})"
-    if obj.chroma is not None:
-        name += f" and u'v' <= {obj.chroma:g}"
+        name += ", unconstrained (the floor of three bands)"
+    else:
+        name += " subject to non-negative"
+        if obj.margin:
+            name += f" (margin {pct(obj.margin, 2)})"
+        if obj.chroma is not None:
+            name += f" and u'v' <= {obj.chroma:g}"
+    if obj.normals != irf.OPTIMISATION_NORMALS and obj.needs_normals:
+        name += f" [{obj.normals}-point sphere]"
     return name
 
 
@@ -210,37 +347,57 @@ def objective_tag(obj: irf.Objective) -> str:
     return f"{obj.method}_m{obj.margin:g}_w{obj.weight:g}_c{obj.chroma if obj.chroma is not None else 0:g}_n{obj.normals}"
 
 
-def study_methods(ev: Evaluator, cache: Path, objectives: list[irf.Objective]) -> dict[str, NDArray]:
-    """Coefficients (S, 9, 3) of every method of the table, each objective's solves cached."""
-    methods = {"plain projection (L2-optimal, unconstrained)": ev.truth["coeffs"][:, :9]}
+def runtime_name(gibbs: bool) -> str:
+    return f"runtime gibbs={gibbs}, dering=True"
+
+
+def method_coefficients(ev: Evaluator, objectives: Iterable[irf.Objective], sky: Any, cache: Path | None = None,
+                        mapper: Mapper = map, log: Log = progress) -> dict[str, NDArray]:
+    """Coefficients (S, 9, 3) of every method: the plain projection, the runtime's pipeline (gibbs off, on), the optima.
+
+    Each objective's solves are cached under ``cache`` (None: not cached).
+    """
+    methods = {PLAIN: ev.truth["coeffs"][:, :9]}
     for gibbs in (False, True):
-        runtime = runtime_coefficients(ev.skies, gibbs)
-        if runtime is not None:
-            methods[f"runtime gibbs={gibbs}, dering=True"] = runtime
+        methods[runtime_name(gibbs)] = runtime_coefficients(sky, ev.skies, gibbs)
     for obj in objectives:
         def solve(obj: irf.Objective = obj) -> dict[str, NDArray]:
-            progress(f"{len(ev.skies)} skies: {objective_name(obj)}")
-            return {"coeffs": solve_skies(ev, obj)}
+            log(f"{len(ev.skies)} skies: {objective_name(obj)}")
+            return {"coeffs": solve_skies(ev, obj, mapper)}
 
-        methods[objective_name(obj)] = cached(cache / f"skies{len(ev.skies)}_{objective_tag(obj)}.npz", solve)["coeffs"]
+        path = None if cache is None else cache / f"skies{len(ev.skies)}_{objective_tag(obj)}.npz"
+        methods[objective_name(obj)] = cached(path, solve)["coeffs"]
     return methods
 
 
+def measure_methods(ev: Evaluator, methods: dict[str, NDArray]) -> dict[str, dict[str, NDArray]]:
+    """:meth:`Evaluator.measure` of every method."""
+    return {name: ev.measure(coeffs) for name, coeffs in methods.items()}
+
+
+TABLE_HEADER: tuple[str, ...] = ("worst error (worst / median sky)", "lowest value",
+                                 "u'v' worst normal (worst / median sky)", "u'v' median normal (worst / median sky)")
+"""Columns of :func:`row_cells`."""
+
+
+def row_cells(r: dict[str, NDArray]) -> list[str]:
+    """The table cells of one method's measures (:meth:`Evaluator.measure`), as :data:`TABLE_HEADER`."""
+    negative = int(np.sum(r["lowest"] < -NEGATIVE_TOL))
+    low = (f"negative on {negative} of {r['lowest'].size} skies (down to {pct(r['lowest'].min())} of the mean)"
+           if negative else f"non-negative (lowest {pct(r['lowest'].min(), 2)} of the mean)")
+    extra = f", {int(r['undefined'].sum())} undefined" if r["undefined"].sum() else ""
+    return [f"{pct(r['error'].max())} / {pct(np.median(r['error']))}", low,
+            f"{r['uv_worst'].max():.4f} / {np.median(r['uv_worst']):.4f}{extra}",
+            f"{r['uv_median'].max():.5f} / {np.median(r['uv_median']):.5f}"]
+
+
 def table_rows(ev: Evaluator, methods: dict[str, NDArray]) -> dict[str, dict[str, NDArray]]:
-    print("| 3-band irradiance | worst error (worst / median sky) | lowest value | u'v' worst normal (worst / median sky) "
-          "| u'v' median normal (worst / median sky) |")
+    """Measure every method and print the markdown table; returns the measures."""
+    results = measure_methods(ev, methods)
+    print("| 3-band irradiance | " + " | ".join(TABLE_HEADER) + " |")
     print("|---|---|---|---|---|")
-    results = {}
-    for name, coeffs in methods.items():
-        r = ev.measure(coeffs)
-        results[name] = r
-        negative = int(np.sum(r["lowest"] < -NEGATIVE_TOL))
-        low = (f"negative on {negative} of {len(ev.skies)} skies (down to {pct(r['lowest'].min())} of the mean)"
-               if negative else f"non-negative (lowest {pct(r['lowest'].min(), 2)} of the mean)")
-        extra = f", {int(r['undefined'].sum())} undefined" if r["undefined"].sum() else ""
-        print(f"| {name} | {pct(r['error'].max())} / {pct(np.median(r['error']))} | {low} | "
-              f"{r['uv_worst'].max():.4f} / {np.median(r['uv_worst']):.4f}{extra} | "
-              f"{r['uv_median'].max():.5f} / {np.median(r['uv_median']):.5f} |")
+    for name, r in results.items():
+        print(f"| {name} | " + " | ".join(row_cells(r)) + " |")
     return results
 
 
@@ -268,16 +425,60 @@ def solve_points(ts: NDArray, tu: NDArray, objective: irf.Objective, pool: Any) 
 def max_abs_difference(a: NDArray, b: NDArray, mean: NDArray) -> NDArray:
     """max over the sphere of |f_a - f_b| / mean, exactly (two exact minima), per point: (P, 9, 3) -> (P,)."""
     d = a - b
-    return np.max(np.maximum(-irf.sphere_minimum(d), -irf.sphere_minimum(-d)) / mean, axis=1)
+    return np.max(np.maximum(-exact_min(d), -exact_min(-d)) / mean, axis=1)
 
 
-def cross_check_minimum(coeffs: NDArray, minimum: NDArray) -> float | None:
-    """Largest |difference| (of the mean) to the deringing module's exact minimum, if it has one."""
-    try:
-        from skysh.dering import exact_min
-    except ImportError:
-        return None
-    other = np.min(exact_min(coeffs) / (irf.Y00 * coeffs[:, 0]), axis=1)
+def grid_path(obj: irf.Objective, grid: tuple[int, int], cache: Path) -> Path:
+    """The cache file of the grid solve of ``obj`` over ``grid``."""
+    return cache / f"grid_{objective_tag(obj)}_{grid[0]}x{grid[1]}.npz"
+
+
+def grid_solution(obj: irf.Objective, grid: tuple[int, int], cache: Path | None, mapper: Mapper = map,
+                  log: Log = progress) -> dict[str, NDArray]:
+    """The optimum over the Chebyshev ``grid`` (cached under ``cache`` unless None): coeffs (n_ts, n_t, 9, 3),
+    minimum (n_ts, n_t, 3), wall seconds and CPU seconds (NaN when solved in worker processes)."""
+    ts_axis, tu_axis = grid_axes(grid)
+
+    def solve() -> dict[str, NDArray]:
+        log(f"grid {grid} {objective_tag(obj)}")
+        start, cpu = time.perf_counter(), time.process_time()
+
+        def counted(f: Callable, jobs: Iterable) -> Iterator:
+            jobs = list(jobs)
+            for k, result in enumerate(mapper(f, jobs)):
+                if (k + 1) % 96 == 0:
+                    log(f"  {k + 1} / {len(jobs)}")
+                yield result
+
+        coeffs, minimum = irf.constrained_irradiance_grid(ts_axis, tu_axis, obj, counted)
+        return {"coeffs": coeffs, "minimum": minimum, "seconds": np.array(time.perf_counter() - start),
+                "cpu": np.array(time.process_time() - cpu if mapper is map else np.nan)}
+
+    return cached(None if cache is None else grid_path(obj, grid, cache), solve)
+
+
+def fit_grid(g: dict[str, NDArray], grid: tuple[int, int], degrees: tuple[int, int] = DEGREES) -> tuple[NDArray, NDArray, float]:
+    """The grid solve ``g`` (:func:`grid_solution`) fitted as the sky table: (table, degrees, condition)."""
+    ts_g, tu_g = fit.chebyshev_grid(grid)
+    return irf.fit_irradiance_table(ts_g, tu_g, g["coeffs"].reshape(-1, 9, 3), degrees)
+
+
+def nonnegative_check(evaluate: Callable[[NDArray, NDArray], NDArray], count: int = NONNEG_POINTS,
+                      per_edge: int = NONNEG_PER_EDGE, seed: int = NONNEG_SEED) -> dict[str, Any]:
+    """Exact minimum / mean of tabulated irradiance ``evaluate(ts, tu) -> (P, 9, 3)`` at held-out points.
+
+    ``count`` random points, the 4 corners and ``per_edge`` points per edge (seeded);
+    returns the points, the coefficients there and the minimum per point (worst channel).
+    """
+    ts, tu = held_out(count, per_edge, seed)
+    dense = evaluate(ts, tu)
+    minimum = np.min(exact_min(dense) / (irf.Y00 * dense[:, 0]), axis=1)
+    return {"ts": ts, "tu": tu, "coeffs": dense, "minimum": minimum}
+
+
+def cross_check_minimum(coeffs: NDArray, minimum: NDArray) -> float:
+    """Largest |difference| (of the mean) between :func:`skysh.dering.exact_min` and :func:`irradiance_fit.sphere_minimum`."""
+    other = np.min(irf.sphere_minimum(coeffs) / (irf.Y00 * coeffs[:, 0]), axis=1)
     return float(np.max(np.abs(other - minimum)))
 
 
@@ -285,26 +486,8 @@ def tabulate(obj: irf.Objective, grid: tuple[int, int], cache: Path, pool: Any, 
              solves: int) -> dict[str, Any]:
     """Grid solve (cached, timed), fit, held-out fit error, exact minimum at >= 10^4 points, the study's skies."""
     tag = objective_tag(obj)
-    ts_axis, tu_axis = grid_axes(grid)
-
-    def grid_solve() -> dict[str, NDArray]:
-        progress(f"grid {grid} {tag}")
-        start, cpu = time.perf_counter(), time.process_time()
-        def mapper(f: Callable, jobs: Any) -> Any:
-            jobs = list(jobs)
-            results = pool.map(f, jobs, chunksize=4) if pool is not None else map(f, jobs)
-            for k, result in enumerate(results):
-                if (k + 1) % 96 == 0:
-                    progress(f"  {k + 1} / {len(jobs)}")
-                yield result
-
-        coeffs, minimum = irf.constrained_irradiance_grid(ts_axis, tu_axis, obj, mapper)
-        return {"coeffs": coeffs, "minimum": minimum, "seconds": np.array(time.perf_counter() - start),
-                "cpu": np.array(time.process_time() - cpu if pool is None else np.nan)}
-
-    g = cached(cache / f"grid_{tag}_{grid[0]}x{grid[1]}.npz", grid_solve)
-    ts_g, tu_g = fit.chebyshev_grid(grid)
-    table, degrees, condition = irf.fit_irradiance_table(ts_g, tu_g, g["coeffs"].reshape(-1, 9, 3), DEGREES)
+    g = grid_solution(obj, grid, cache, map if pool is None else lambda f, jobs: pool.map(f, jobs, chunksize=4))
+    table, degrees, condition = fit_grid(g, grid)
     hts, htu = held_out(solves, 8, SEED)
 
     def held_out_solve() -> dict[str, NDArray]:
@@ -314,15 +497,14 @@ def tabulate(obj: irf.Objective, grid: tuple[int, int], cache: Path, pool: Any, 
     exact = cached(cache / f"heldout_{tag}_{hts.size}.npz", held_out_solve)["coeffs"]
     tab = irf.evaluate_irradiance_table(table, degrees, hts, htu)
     fit_error = max_abs_difference(tab, exact, irf.Y00 * exact[:, 0])
-    nts, ntu = held_out(NONNEG_POINTS, 500, SEED + 7)
-    dense = irf.evaluate_irradiance_table(table, degrees, nts, ntu)
-    minimum = np.min(irf.sphere_minimum(dense) / (irf.Y00 * dense[:, 0]), axis=1)
-    agreement = cross_check_minimum(dense, minimum)
-    on_skies = irf.evaluate_irradiance_table(table, degrees, *map(np.array, zip(*ev.skies)))
+    check = nonnegative_check(lambda ts, tu: irf.evaluate_irradiance_table(table, degrees, ts, tu))
+    worst = int(np.argmin(check["minimum"]))
+    on_skies = irf.evaluate_irradiance_table(table, degrees, *sky_arrays(ev.skies))
     return {"tag": tag, "seconds": float(g["seconds"]), "cpu": float(g.get("cpu", np.nan)), "condition": condition,
-            "fit_error": fit_error, "grid_min": float(g["minimum"].min()), "nonneg_points": int(nts.size), "minimum": minimum,
-            "worst_at": (float(nts[np.argmin(minimum)]), float(ntu[np.argmin(minimum)])), "skies": on_skies,
-            "table": table, "degrees": degrees, "agreement": agreement}
+            "fit_error": fit_error, "grid_min": float(g["minimum"].min()), "nonneg_points": int(check["ts"].size),
+            "minimum": check["minimum"], "worst_at": (float(check["ts"][worst]), float(check["tu"][worst])),
+            "skies": on_skies, "table": table, "degrees": degrees,
+            "agreement": cross_check_minimum(check["coeffs"], check["minimum"])}
 
 
 def section_tabulation(ev: Evaluator, tabulated: dict[irf.Objective, dict[str, Any]], grid: tuple[int, int],
@@ -330,11 +512,12 @@ def section_tabulation(ev: Evaluator, tabulated: dict[irf.Objective, dict[str, A
     print(f"## 3. Tabulation: grid {grid[0]} x {grid[1]} (Chebyshev nodes), degrees {DEGREES}, the sky table's form\n")
     print("Fit error: max over the sphere (exact) of |tabulated - exact optimum| / mean, at "
           f"{solves} random held-out points + corners + 32 edge points (seed {SEED}); minimum: exact minimum of the "
-          f"tabulated irradiance / its mean at {NONNEG_POINTS} random + 4 corners + 2,000 edge points (seed {SEED + 7}); "
+          f"tabulated irradiance / its mean at {NONNEG_POINTS} random + 4 corners + 2,000 edge points (seed {NONNEG_SEED}); "
           f"errors of the tabulated result on the {len(ev.skies)} skies as in section 2.\n")
-    agreement = [r["agreement"] for r in tabulated.values() if r["agreement"] is not None]
+    agreement = [r["agreement"] for r in tabulated.values()]
     if agreement:
-        print(f"The tabulated minima agree with `skysh.dering.exact_min` to {max(agreement):.1e} of the mean.\n")
+        print("The tabulated minima (`skysh.dering.exact_min`) agree with `irradiance_fit.sphere_minimum` to "
+              f"{max(agreement):.1e} of the mean.\n")
     print("| objective | grid solve: wall / CPU (1 process) | fit error worst / median | tabulated minimum (at) "
           "| points negative | worst error (worst / median sky) | u'v' worst normal (worst / median sky) |")
     print("|---|---|---|---|---|---|---|")
@@ -352,18 +535,21 @@ def section_tabulation(ev: Evaluator, tabulated: dict[irf.Objective, dict[str, A
 # --------------------------------------------------------------------------- #
 # Chart and command line
 # --------------------------------------------------------------------------- #
-def chart(ev: Evaluator, results: dict[str, dict[str, NDArray]], path: Path, highlight: str = "") -> None:
-    """Worst error and worst u'v' distance over turbidities against the sun zenith, per method (``highlight`` bold)."""
+def chart_figure(skies: list[tuple[float, float]], results: dict[str, dict[str, NDArray]], highlight: str = "",
+                 title: str = "", bound: float | None = None) -> Any:
+    """Figure: worst error and worst u'v' distance over turbidities against the sun zenith, per method (``highlight``
+    bold; ``bound``, a fraction, drawn as a dotted line on the error panel)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.ticker import FuncFormatter
 
-    zen = np.array([math.degrees(ts) for ts, _ in ev.skies])
+    zen = np.array([math.degrees(ts) for ts, _ in skies])
     axis = np.unique(zen)
+    turbidities = ", ".join(f"{t:g}" for t in sorted({t for _, t in skies}))
     fig, axes = plt.subplots(1, 2, figsize=(15, 7.5))
-    colours = plt.get_cmap("tab20").colors
+    colours = plt.get_cmap("tab20").colors  # type: ignore[attr-defined]  # a ListedColormap
     for k, (name, r) in enumerate(results.items()):
         style = {"color": colours[(2 * k) % 20 + (k // 10) % 2], "marker": "os^vDP*Xh<>p"[k % 12], "markersize": 4,
                  "linewidth": 1.3, "linestyle": "-" if k < 10 else "--"}
@@ -371,19 +557,30 @@ def chart(ev: Evaluator, results: dict[str, dict[str, NDArray]], path: Path, hig
             style.update(color="black", linewidth=2.6, linestyle="-")
         axes[0].plot(axis, [100.0 * r["error"][zen == z].max() for z in axis], label=name, **style)
         axes[1].plot(axis, [r["uv_worst"][zen == z].max() for z in axis], **style)
+    if bound is not None:
+        axes[0].axhline(100.0 * bound, color="grey", linestyle=":", linewidth=1.5, label=f"bound {pct(bound)}")
     axes[0].set_ylabel("worst irradiance error over normals and RGB (% of the channel's true mean)")
     axes[1].set_ylabel(f"worst CIE 1976 u'v' distance (unitless; normals lit >= {CHROMA_FLOOR:g} x mean)")
-    for ax, title in ((axes[0], "Irradiance error against the sun zenith"),
-                      (axes[1], "Chromaticity error against the sun zenith")):
+    for ax, name in ((axes[0], "Irradiance error against the sun zenith"),
+                     (axes[1], "Chromaticity error against the sun zenith")):
         ax.set_yscale("log")
         ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
         ax.yaxis.set_minor_formatter(FuncFormatter(lambda v, _: f"{v:g}" if f"{v:.0e}"[0] in "25" else ""))
-        ax.set_xlabel("sun zenith angle (degrees); worst over turbidity 2.5, 4, 6")
-        ax.set_title(title)
+        ax.set_xlabel(f"sun zenith angle (degrees); worst over turbidity {turbidities}")
+        ax.set_title(name)
         ax.grid(True, which="both", alpha=0.3)
     fig.legend(loc="lower center", ncol=2, fontsize=8, frameon=False)
-    fig.suptitle(f"3-band irradiance against the true sky ({len(ev.skies)} skies, 12,168 normals, truth 64 bands)")
+    fig.suptitle(title or f"3-band irradiance against the true sky ({len(skies)} skies)")
     fig.tight_layout(rect=(0, 0.2, 1, 1))
+    return fig
+
+
+def chart(ev: Evaluator, results: dict[str, dict[str, NDArray]], path: Path, highlight: str = "") -> None:
+    """:func:`chart_figure` of the study, saved as PNG."""
+    import matplotlib.pyplot as plt
+
+    fig = chart_figure(ev.skies, results, highlight, f"3-band irradiance against the true sky ({len(ev.skies)} skies, "
+                       f"{ev.normals.shape[0]:,} normals, truth {ev.truth_bands} bands)")
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -406,7 +603,8 @@ def parse_objective(text: str) -> irf.Objective:
 
 
 def parse(argv: list[str] | None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = argparse.ArgumentParser(description=(__doc__ or "").split("\n\n")[0],
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--out", type=Path, required=True, help="directory of the chart and the cache")
     p.add_argument("--workers", type=int, default=1, help="processes for the grid solves (default 1)")
     p.add_argument("--quick", action="store_true", help="12 skies, a 12 x 6 grid, 16 held-out solves")
@@ -427,14 +625,16 @@ def parse(argv: list[str] | None) -> argparse.Namespace:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from skysh.runtime import SkySH
+
     args = parse(argv)
     zeniths, grid, solves = SKY_ZENITHS_DEG, GRID, HELD_OUT_SOLVES
     if args.quick:
         zeniths, grid, solves = (0, 60, 89, 90), (12, 6), 16
-    skies = [(math.radians(z), t) for z in zeniths for t in SKY_TURBIDITIES]
+    skies = sky_points(zeniths)
     cache = args.out / "cache" / ("quick" if args.quick else "full")
-    ev = Evaluator(cache, skies)
-    methods = study_methods(ev, cache, args.objectives)
+    ev = Evaluator(skies, cache)
+    methods = method_coefficients(ev, args.objectives, SkySH.load(), cache)
     pool = ProcessPoolExecutor(args.workers) if args.workers > 1 else None
     try:
         tabulated = {obj: tabulate(obj, grid, cache, pool, ev, solves) for obj in args.tabulate}
@@ -449,7 +649,7 @@ def main(argv: list[str] | None = None) -> int:
           f"{', '.join(map(str, SKY_TURBIDITIES))}), 12,168 normals, truth 64 bands\n")
     print(f"u'v': distance to the truth's chromaticity per normal where the true luminance irradiance is >= "
           f"{CHROMA_FLOOR:g} x its mean; worst normal and median normal per sky. Lowest value: exact minimum over the "
-          f"sphere / the true mean (below -{NEGATIVE_TOL:g} counts as negative).\n")
+          f"sphere (`skysh.dering.exact_min`) / the true mean (below -{NEGATIVE_TOL:g} counts as negative).\n")
     results = table_rows(ev, methods)
     print()
     if tabulated:

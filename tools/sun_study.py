@@ -108,7 +108,7 @@ def _truncation() -> None:
 # --------------------------------------------------------------------------- #
 def _min_ratio(window: np.ndarray) -> float:
     """Exact minimum of a unit delta's windowed irradiance over its mean (1/4)."""
-    return solar._series_minimum(solar._irradiance_series(window)) / 0.25
+    return solar.delta_irradiance_minimum(window) / 0.25
 
 
 def section_windows(derive: bool) -> None:

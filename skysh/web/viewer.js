@@ -19,7 +19,7 @@
 
   // ------------------------------------------------------------------ controls
   const RANGES = ["sun-zenith", "sun-azimuth", "turbidity", "bands", "ev"];
-  const CHECKS = ["gibbs", "dering", "mark-negative", "irradiance"];
+  const CHECKS = ["gibbs", "dering", "irradiance-table", "mark-negative", "irradiance"];
   const SELECTS = ["engine", "readout-format"];
 
   function controls() {
@@ -37,6 +37,7 @@
       bands,
       gibbs: $("gibbs").checked,
       dering: $("dering").checked,
+      irradianceTable: $("irradiance-table").checked,
       markNegative: $("mark-negative").checked,
       ev: value("ev"),
       engine,
@@ -61,6 +62,9 @@
     $("dering-note").textContent = available ? "" : `(not in this runtime for ${bands} bands)`;
     $("irradiance").disabled = $("engine").value !== "";
     if ($("irradiance").disabled) $("irradiance").checked = false;
+    $("irradiance-table").disabled = !viewer.hasIrradianceTable;
+    if (!viewer.hasIrradianceTable) $("irradiance-table").checked = false;
+    $("irradiance-table-note").textContent = viewer.hasIrradianceTable ? "" : "(not in this runtime)";
     const number = (id) => Number($(id).value);
     $("sun-zenith-out").value = number("sun-zenith").toFixed(1);
     $("sun-azimuth-out").value = number("sun-azimuth").toFixed(1);
@@ -93,9 +97,19 @@
     return rows;
   }
 
+  /** The runtime's options of the controls (unticked table: the old pipeline, as irradiance_table=False). */
+  function optionsOf(s, extra) {
+    return { bands: s.bands, gibbs: s.gibbs, dering: s.dering, ...(s.irradianceTable ? {} : { irradianceTable: false }), ...extra };
+  }
+
+  /** Whether the runtime takes the certified irradiance table for these controls (its rule, by intent). */
+  function usesTable(s, diffuse) {
+    return s.irradianceTable && diffuse && s.bands === 3 && !s.gibbs && s.dering;
+  }
+
   /** The read-out text: the coefficients as `skysh coeffs --format json` writes them, or the engine snippet. */
   function readout(s) {
-    const options = { bands: s.bands, gibbs: s.gibbs, dering: s.dering };
+    const options = optionsOf(s, {});
     if (s.engine !== null) options.engine = s.engine;
     else options.irradiance = s.irradiance;
     let values;
@@ -119,6 +133,7 @@
       turbidity: s.turbidity,
       gibbs: s.gibbs,
       dering: s.dering,
+      irradiance_table: usesTable(s, s.irradiance || s.engine !== null),
       colourspace: config.colourspace,
     };
     let payload;
@@ -195,18 +210,16 @@
 
   let UP = null; // the SH basis at the zenith (the ground's normal)
 
-  /** Upload the frame's uniforms: the coefficients (radiance, irradiance), the sky, the exposure. */
-  function setUniforms(state, coeffs, exposure) {
+  /** Upload the frame's uniforms: the coefficients (radiance; irradiance as the runtime gives it), the sky, the exposure. */
+  function setUniforms(state, coeffs, irr, exposure) {
     const n = state.bands, size = config.maxBands * config.maxBands * 3;
     const radiance = new Float32Array(size), irradiance = new Float32Array(size);
     const ground = [0.0, 0.0, 0.0];
     sky.basis(0.0, 0.0, 1.0, n, UP, 0);
-    for (let l = 0; l < n; l++) {
-      for (let k = 3 * l * l; k < 3 * (l + 1) * (l + 1); k++) {
-        radiance[k] = coeffs[k];
-        irradiance[k] = config.lobe[l] * coeffs[k];
-        ground[k % 3] += (UP[Math.floor(k / 3)] * config.lobe[l] * coeffs[k]) / Math.PI;
-      }
+    for (let k = 0; k < 3 * n * n; k++) {
+      radiance[k] = coeffs[k];
+      irradiance[k] = irr[k];
+      ground[k % 3] += (UP[Math.floor(k / 3)] * irr[k]) / Math.PI;
     }
     const m = config.xyzToRgb;
     const xyzToRgb = [m[0][0], m[1][0], m[2][0], m[0][1], m[1][1], m[2][1], m[0][2], m[1][2], m[2][2]];
@@ -227,7 +240,7 @@
   }
 
   /** Draw the panels (all, or the one named `only`); their rectangles in canvas pixels. */
-  function draw(state, coeffs, exposure, only = null) {
+  function draw(state, coeffs, irr, exposure, only = null) {
     const scale = Math.min(window.devicePixelRatio || 1, 2);
     const box = canvas.getBoundingClientRect();
     const width = Math.round(box.width * scale), height = Math.round(box.height * scale);
@@ -236,7 +249,7 @@
     gl.viewport(0, 0, width, height);
     gl.clearColor(0, 0, 0, 0);
     gl.clear(gl.COLOR_BUFFER_BIT);
-    setUniforms(state, coeffs, exposure);
+    setUniforms(state, coeffs, irr, exposure);
     gl.enable(gl.SCISSOR_TEST);
     const rects = {};
     for (const panel of panels) {
@@ -303,17 +316,19 @@
     const start = performance.now();
     const s = controls();
     s.sky = sky.skyState(s.sunZenith, s.turbidity, s.sunAzimuth);
-    const coeffs = runtime.coefficients(s.sunZenith, s.turbidity, s.sunAzimuth, { bands: s.bands, gibbs: s.gibbs, dering: s.dering });
+    const coeffs = runtime.coefficients(s.sunZenith, s.turbidity, s.sunAzimuth, optionsOf(s, {}));
+    // the scene's irradiance as the runtime gives it (the certified table by intent), not A_l times the radiance
+    const irr = runtime.coefficients(s.sunZenith, s.turbidity, s.sunAzimuth, optionsOf(s, { irradiance: true }));
     const numbers = sky.metrics(s.sky, coeffs, s.bands);
     const exposure = (config.keyValue / numbers.logAverage) * 2 ** s.ev;
-    const rects = gl ? draw(s, coeffs, exposure, only) : {};
+    const rects = gl ? draw(s, coeffs, irr, exposure, only) : {};
     overlays(s);
     $("error-value").textContent = percent(numbers.error);
     $("ringing-value").textContent = percent(numbers.ringing);
     $("exposure-value").textContent = `${exposure.toPrecision(4)} per cd/m\u00b2`;
     const text = readout(s);
     if ($("readout").value !== text) $("readout").value = text;
-    current = { ...s, coefficients: Array.from(coeffs), exposure, ...numbers, rects };
+    current = { ...s, coefficients: Array.from(coeffs), irradianceCoefficients: Array.from(irr), exposure, ...numbers, rects };
     viewer.frame += 1;
     viewer.updateMs = performance.now() - start;
     $("update-ms").textContent = `${viewer.updateMs.toFixed(1)} ms (CPU, last change)`;
@@ -358,6 +373,13 @@
       } catch (error) {
         if (!(error instanceof RangeError)) throw error; // this runtime has no deringing for n bands
       }
+    }
+    try { // the certified irradiance table: a 3-band runtime of a format-4 file
+      runtime.coefficients(0.5, 3.0, 0.0, { bands: 3, irradiance: true, irradianceTable: true });
+      viewer.hasIrradianceTable = true;
+    } catch (error) {
+      if (!(error instanceof RangeError)) throw error;
+      viewer.hasIrradianceTable = false;
     }
     $("bands").max = String(runtime.MAX_BANDS);
     $("rule-size").textContent = String(sky.ruleSize);

@@ -32,6 +32,8 @@ from report import (
     s08_stability,
     s09_scene,
     s10_pictures,
+    s11_irradiance_table,
+    s12_scene_irradiance,
 )
 from report.common import Context, Section, markdown_table, sig
 from report.plans import FULL, QUICK
@@ -40,7 +42,7 @@ from skysh.runtime import SkySH
 SECTIONS: dict[int, ModuleType] = {
     m.NUMBER: m
     for m in (s01_projection, s02_fit, s03_speed, s04_gibbs, s05_dering, s06_quantization, s07_irradiance,
-              s08_stability, s09_scene, s10_pictures)
+              s08_stability, s09_scene, s10_pictures, s11_irradiance_table, s12_scene_irradiance)
 }
 """Report sections in order; each computes its data, then renders it."""
 

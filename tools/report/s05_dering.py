@@ -4,7 +4,7 @@ Section 5: deringing
 
 :func:`skysh.dering.dering` (Sloan 2017) over the domain: the windows chosen, the
 target's minimum before and after (:func:`skysh.dering.exact_min`), the slack of
-the seed's bound :func:`skysh.dering.min_bound` against the exact minimum, and the
+the seed's bound :func:`studies.seed_bound.min_bound` against the exact minimum, and the
 detail each window removes against the time of a call.
 """
 
@@ -21,6 +21,7 @@ from matplotlib.colors import Normalize
 from numpy.typing import NDArray
 
 from report.common import MAX_BANDS, Context, Section, best_time, heatmap, mean_value, pct, sig, style_axes, uniform_grid, us
+from report.studies import min_bound
 from skysh import dering, sh
 
 NUMBER: int = 5
@@ -77,7 +78,7 @@ def _bound_slack(c3: dict[bool, NDArray], count: int) -> dict[str, dict[str, NDA
     """``exact_min``, ``min_bound`` and their difference (the bound's slack) per set, in the set's unit."""
     out = {}
     for name, (f, unit) in _bound_sets(c3, count).items():
-        exact, bound = dering.exact_min(f) / unit, dering.min_bound(f) / unit
+        exact, bound = dering.exact_min(f) / unit, min_bound(f) / unit
         out[name] = {"exact": exact.ravel(), "bound": bound.ravel(), "slack": (exact - bound).ravel()}
     return out
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 from quantize_experiment import hazel_markdown, reconstruction_timings, table3_markdown
 from studies.hazel_study import COMPARISON_THETA_NODES, COSTS, exact_irradiance, irradiance_comparison, irradiance_experiment
 from studies.quantize_study import table3_experiment
+from studies.seed_bound import min_bound
 from studies.sky import sample_sky_parameters, sky_coefficients
 
 __all__ = [
@@ -23,6 +24,7 @@ __all__ = [
     "hazel_markdown",
     "irradiance_comparison",
     "irradiance_experiment",
+    "min_bound",
     "reconstruction_timings",
     "sample_sky_parameters",
     "sky_coefficients",

@@ -20,13 +20,8 @@ from studies.sky import sample_sky_parameters, sky_coefficients
 __all__ = ["table3_experiment", "l1_rule_check"]
 
 
-def table3_experiment(
-    n_points: int = 1024,
-    seed: int | None = 0,
-    bits: int = quantize.DEFAULT_BITS,
-    source: str = "runtime",
-    n_theta: int = quantize.TABLE3_THETA_NODES,
-) -> dict[str, Any]:
+def table3_experiment(n_points: int = 1024, seed: int | None = 0, bits: int = quantize.DEFAULT_BITS, source: str = "runtime",
+                      n_theta: int = quantize.TABLE3_THETA_NODES) -> dict[str, Any]:
     """
     The seed's Table 3 on sky data: :func:`skysh.quantize.table3_errors` over many sky points.
 
@@ -53,13 +48,8 @@ def table3_experiment(
     return result
 
 
-def l1_rule_check(
-    n_points: int = 64,
-    seed: int | None = 0,
-    bits: int = quantize.DEFAULT_BITS,
-    source: str = "runtime",
-    n_theta: int = quantize.TABLE3_THETA_NODES,
-) -> float:
+def l1_rule_check(n_points: int = 64, seed: int | None = 0, bits: int = quantize.DEFAULT_BITS, source: str = "runtime",
+                  n_theta: int = quantize.TABLE3_THETA_NODES) -> float:
     """
     Largest relative change of a Table 3 L1 sum from ``n_theta`` to ``2 n_theta`` Gauss nodes.
 

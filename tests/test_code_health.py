@@ -1,0 +1,373 @@
+"""
+Code health, measured (issue 14)
+================================
+
+Every ``.py`` file below ``skysh/`` and ``tools/`` (recursively) is parsed, nothing is
+imported or run, and held to:
+
+-   :data:`MAX_MODULE_LINES` lines per module (physical lines, docstrings and comments included);
+-   :data:`MAX_FUNCTION_LINES` lines per function or method, from its ``def`` line to its last
+    line (decorators not counted; a nested function counts in its parent and on its own);
+-   :data:`MAX_COMPLEXITY`, McCabe's cyclomatic complexity as radon computes it
+    (:func:`radon.complexity.cc_visit`; a closure or method is its own block, as radon reports it).
+
+The package, the tools and ``benchmarks/`` are also held to the "no reach-ins" rules:
+
+-   no ``from M import _name`` where ``M`` is another first-party module (``skysh``, its
+    modules, the tools' modules and packages, the benchmarks' modules) and ``_name`` is not
+    itself a module (``from skysh import _checks`` imports a module and is fine);
+-   no ``M._name`` (nor ``getattr``/``setattr``/``delattr`` with ``"_name"``) where ``M`` is a
+    name bound by an import of another first-party module, or of an object taken from one
+    (``SkySH._x``); dunders (``__name__``) are public;
+-   no ``obj._name`` for the instance privates other modules are known to have been read
+    through: :data:`KNOWN_INSTANCE_PRIVATES` (issue 14's list), and every ``self._name`` a class
+    of another ``skysh`` module assigns (:func:`instance_privates`), unless the file defines
+    that name for its own objects. An instance's type cannot be known without running the
+    code, so this is a name-level check; a reach-in under a fresh name would pass it.
+
+Every violation is listed in the failure message as ``path:line: what (measured > limit)``.
+The negative controls feed small synthetic sources to the same checkers.
+"""
+
+from __future__ import annotations
+
+import ast
+import textwrap
+from collections.abc import Iterable, Iterator
+from functools import cache
+from pathlib import Path
+from typing import NamedTuple
+
+import pytest
+from radon.complexity import cc_visit
+from radon.visitors import Class, Function
+
+ROOT: Path = Path(__file__).resolve().parent.parent
+
+MAX_MODULE_LINES: int = 700
+"""Issue 14: a module a reader takes in one sitting."""
+MAX_FUNCTION_LINES: int = 80
+"""Issue 14: a function that fits on a screen and a half."""
+MAX_COMPLEXITY: int = 20
+"""Issue 14: radon's grade D starts at 21 ("more than moderate risk")."""
+
+SIZE_SCOPE: tuple[str, ...] = ("skysh", "tools")
+"""Folders held to the size and complexity limits."""
+PRIVACY_SCOPE: tuple[str, ...] = ("skysh", "tools", "benchmarks")
+"""Folders held to the no-reach-in rules (tests may look inside the modules they test)."""
+
+KNOWN_INSTANCE_PRIVATES: dict[str, str] = {
+    "_plans": "SkySH's fitted tables (export.py read sky._plans)",
+    "_NEWTON_STEPS": "dering's iteration count (the report monkeypatched it)",
+    "_X_SCALE": "runtime's domain scale (export.py read it)",
+    "_TMAX": "runtime's turbidity bound (export.py read it)",
+    "_solve": "fit's solver (the report called fit._solve)",
+    "_project_one": "fit's projection (the report called fit._project_one)",
+    "_luminance_scale": "preetham's luminance scale (runtime imported it)",
+}
+"""Private names issue 14 found read from outside their module, with where."""
+
+
+class Violation(NamedTuple):
+    path: str  # relative to the repository root
+    line: int
+    what: str
+
+    def __str__(self) -> str:
+        return f"{self.path}:{self.line}: {self.what}"
+
+
+# --------------------------------------------------------------------------- #
+# Files and first-party modules
+# --------------------------------------------------------------------------- #
+def python_files(folders: Iterable[str]) -> list[Path]:
+    """Every ``.py`` file below the given folders of the repository, sorted."""
+    return sorted(p for folder in folders for p in (ROOT / folder).rglob("*.py") if "__pycache__" not in p.parts)
+
+
+def module_name(path: Path) -> str:
+    """The dotted name a file is imported under: ``skysh.fit``, ``report.common``, ``bench_runtime``."""
+    rel = path.relative_to(ROOT).with_suffix("")
+    parts = list(rel.parts)
+    if parts[0] in ("tools", "benchmarks"):  # both folders are put on sys.path, not imported as packages
+        parts = parts[1:]
+    if parts[-1] == "__init__":
+        parts = parts[:-1]
+    return ".".join(parts)
+
+
+@cache
+def first_party() -> frozenset[str]:
+    """Dotted names of every first-party module and package (``skysh``, the tools, the benchmarks)."""
+    names = {module_name(p) for p in python_files(PRIVACY_SCOPE)}
+    return frozenset(names | {n.rsplit(".", i)[0] for n in names for i in range(n.count(".") + 1)})
+
+
+def _is_private(name: str) -> bool:
+    return name.startswith("_") and not (name.startswith("__") and name.endswith("__"))
+
+
+def _is_first_party(dotted: str, modules: frozenset[str]) -> bool:
+    return dotted.split(".")[0] in {m.split(".")[0] for m in modules}
+
+
+# --------------------------------------------------------------------------- #
+# Size and complexity
+# --------------------------------------------------------------------------- #
+def module_length(path: str, source: str) -> list[Violation]:
+    lines = len(source.splitlines())
+    return [Violation(path, 1, f"module of {lines} lines > {MAX_MODULE_LINES}")] if lines > MAX_MODULE_LINES else []
+
+
+def _functions(tree: ast.AST, prefix: str = "") -> Iterator[tuple[str, ast.FunctionDef | ast.AsyncFunctionDef]]:
+    for node in ast.iter_child_nodes(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            yield prefix + node.name, node
+            yield from _functions(node, prefix + node.name + ".")
+        elif isinstance(node, ast.ClassDef):
+            yield from _functions(node, prefix + node.name + ".")
+        else:
+            yield from _functions(node, prefix)
+
+
+def function_lengths(path: str, tree: ast.AST) -> list[Violation]:
+    found = []
+    for name, node in _functions(tree):
+        length = (node.end_lineno or node.lineno) - node.lineno + 1
+        if length > MAX_FUNCTION_LINES:
+            found.append(Violation(path, node.lineno, f"function {name} of {length} lines > {MAX_FUNCTION_LINES}"))
+    return found
+
+
+def _blocks(blocks: Iterable[Function | Class], prefix: str = "") -> Iterator[tuple[str, Function]]:
+    for block in blocks:
+        if isinstance(block, Class):
+            yield from _blocks(block.methods, prefix + block.name + ".")
+            yield from _blocks(block.inner_classes, prefix + block.name + ".")
+        else:
+            yield prefix + block.name, block
+            yield from _blocks(block.closures, prefix + block.name + ".")
+
+
+def complexities(path: str, source: str) -> list[Violation]:
+    top = [b for b in cc_visit(source) if not (isinstance(b, Function) and b.is_method)]  # methods come with their class
+    return [Violation(path, block.lineno, f"function {name} of cyclomatic complexity {block.complexity} > {MAX_COMPLEXITY}")
+            for name, block in _blocks(top) if block.complexity > MAX_COMPLEXITY]
+
+
+# --------------------------------------------------------------------------- #
+# Reach-ins
+# --------------------------------------------------------------------------- #
+def _resolve_from(node: ast.ImportFrom, own: str, is_package: bool) -> str:
+    """The absolute dotted module of ``from ... import``, relative imports resolved against ``own``."""
+    if not node.level:
+        return node.module or ""
+    base = own.split(".") if is_package else own.split(".")[:-1]
+    base = base[: len(base) - (node.level - 1)]
+    return ".".join(base + ([node.module] if node.module else []))
+
+
+def _bindings(tree: ast.AST, own: str, is_package: bool, modules: frozenset[str]) -> tuple[dict[str, str], list[Violation]]:
+    """Names bound to other first-party modules or their objects (name -> dotted origin),
+    and the ``from M import _name`` violations met on the way (path left blank)."""
+    bound: dict[str, str] = {}
+    found: list[Violation] = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                if _is_first_party(alias.name, modules) and alias.name != own:
+                    if alias.asname:
+                        bound[alias.asname] = alias.name
+                    else:
+                        bound[alias.name.split(".")[0]] = alias.name.split(".")[0]
+        elif isinstance(node, ast.ImportFrom):
+            origin = _resolve_from(node, own, is_package)
+            if not _is_first_party(origin, modules) or origin == own:
+                continue
+            for alias in node.names:
+                target = f"{origin}.{alias.name}"
+                if _is_private(alias.name) and target not in modules:
+                    found.append(Violation("", node.lineno, f"from {origin} import {alias.name}: another module's private name"))
+                bound[alias.asname or alias.name] = target
+    return bound, found
+
+
+def _dotted(node: ast.expr, bound: dict[str, str]) -> str | None:
+    """The first-party origin an expression names (``sky`` -> None, ``skysh.fit`` -> ``skysh.fit``)."""
+    if isinstance(node, ast.Name):
+        return bound.get(node.id)
+    if isinstance(node, ast.Attribute):
+        base = _dotted(node.value, bound)
+        return None if base is None else f"{base}.{node.attr}"
+    return None
+
+
+def _self_privates(tree: ast.AST) -> set[str]:
+    """Private attribute names a module's classes give their instances (``self._x = ...``, ``__slots__``)."""
+    names = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and isinstance(node.ctx, ast.Store) and _is_private(node.attr) \
+                and isinstance(node.value, ast.Name) and node.value.id in ("self", "cls"):
+            names.add(node.attr)
+        if isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == "__slots__" for t in node.targets):
+            names |= {e.value for e in ast.walk(node.value)
+                      if isinstance(e, ast.Constant) and isinstance(e.value, str) and _is_private(e.value)}
+    return names
+
+
+@cache
+def instance_privates() -> dict[str, str]:
+    """Every instance-private name a ``skysh`` class assigns, with the module that owns it."""
+    owners: dict[str, str] = {}
+    for path in python_files(("skysh",)):
+        for name in _self_privates(ast.parse(path.read_text(encoding="utf-8"))):
+            owners.setdefault(name, module_name(path))
+    return owners
+
+
+def reach_ins(path: str, tree: ast.AST, own: str, is_package: bool = False,
+              modules: frozenset[str] | None = None, instance_names: dict[str, str] | None = None) -> list[Violation]:
+    """Every reach-in of ``tree`` (the module ``own``) into another first-party module's privates."""
+    modules = first_party() if modules is None else modules
+    instance_names = instance_privates() if instance_names is None else instance_names
+    bound, found = _bindings(tree, own, is_package, modules)
+    found = [v._replace(path=path) for v in found]
+    mine = _self_privates(tree)
+    foreign = {name: f"{owner}'s instance attribute" for name, owner in instance_names.items() if owner != own}
+    foreign |= {name: why for name, why in KNOWN_INSTANCE_PRIVATES.items()}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and _is_private(node.attr):
+            origin = _dotted(node.value, bound)
+            if origin is not None:
+                found.append(Violation(path, node.lineno, f"{ast.unparse(node)}: private {node.attr} of {origin}"))
+            elif node.attr in foreign and node.attr not in mine and not (
+                    isinstance(node.value, ast.Name) and node.value.id in ("self", "cls")):
+                found.append(Violation(path, node.lineno, f"{ast.unparse(node)}: {foreign[node.attr]}"))
+        elif isinstance(node, ast.Call) and isinstance(node.func, (ast.Name, ast.Attribute)) and len(node.args) >= 2:
+            verb = node.func.id if isinstance(node.func, ast.Name) else node.func.attr
+            name = node.args[1]
+            if verb in ("getattr", "setattr", "delattr") and isinstance(name, ast.Constant) \
+                    and isinstance(name.value, str) and _is_private(name.value):
+                origin = _dotted(node.args[0], bound)
+                if origin is not None:
+                    found.append(Violation(path, node.lineno, f"{verb}({origin}, {name.value!r}): private of another module"))
+    return found
+
+
+# --------------------------------------------------------------------------- #
+# The repository's files, measured once
+# --------------------------------------------------------------------------- #
+@cache
+def _parsed(path: Path) -> tuple[str, ast.Module]:
+    source = path.read_text(encoding="utf-8")
+    return source, ast.parse(source, filename=str(path))
+
+
+def _rel(path: Path) -> str:
+    return str(path.relative_to(ROOT))
+
+
+def _check(found: list[Violation], rule: str) -> None:
+    """Fail listing every violation, one ``path:line: what (measured > limit)`` a line."""
+    if found:
+        pytest.fail(f"{len(found)} {rule} violation(s):\n" + "\n".join(map(str, sorted(found))), pytrace=False)
+
+
+def test_scope_is_not_empty():
+    files = python_files(SIZE_SCOPE)
+    assert any(p.name == "sh.py" for p in files) and any("report" in p.parts for p in files)
+
+
+def test_module_length():
+    found = [v for p in python_files(SIZE_SCOPE) for v in module_length(_rel(p), _parsed(p)[0])]
+    _check(found, "module length")
+
+
+def test_function_length():
+    found = [v for p in python_files(SIZE_SCOPE) for v in function_lengths(_rel(p), _parsed(p)[1])]
+    _check(found, "function length")
+
+
+def test_cyclomatic_complexity():
+    found = [v for p in python_files(SIZE_SCOPE) for v in complexities(_rel(p), _parsed(p)[0])]
+    _check(found, "cyclomatic complexity")
+
+
+def test_no_reach_ins():
+    found = [v for p in python_files(PRIVACY_SCOPE)
+             for v in reach_ins(_rel(p), _parsed(p)[1], module_name(p), p.name == "__init__.py")]
+    _check(found, "private reach-in")
+
+
+# --------------------------------------------------------------------------- #
+# Negative controls: the same checkers flag synthetic offenders
+# --------------------------------------------------------------------------- #
+def _branchy(n: int) -> str:
+    return "def branchy(x):\n" + "".join(f"    if x == {i}:\n        return {i}\n" for i in range(n)) + "    return -1\n"
+
+
+def test_negative_control_sizes():
+    assert module_length("m.py", "x = 1\n" * (MAX_MODULE_LINES + 1))
+    assert not module_length("m.py", "x = 1\n" * MAX_MODULE_LINES)
+    long_body = "".join(f"        y{i} = {i}\n" for i in range(MAX_FUNCTION_LINES))  # def line + 80 = 81 lines
+    source = f"class A:\n    def long(self):\n{long_body}\n"
+    found = function_lengths("m.py", ast.parse(source))
+    assert [v.what for v in found] == [f"function A.long of {MAX_FUNCTION_LINES + 1} lines > {MAX_FUNCTION_LINES}"]
+    at_limit = "def short():\n" + "".join(f"    y{i} = {i}\n" for i in range(MAX_FUNCTION_LINES - 1))
+    assert not function_lengths("m.py", ast.parse(at_limit))
+
+
+def test_negative_control_complexity():
+    # complexity = 1 + one per `if`: MAX_COMPLEXITY ifs give MAX_COMPLEXITY + 1
+    found = complexities("m.py", _branchy(MAX_COMPLEXITY))
+    assert [v.what for v in found] == [f"function branchy of cyclomatic complexity {MAX_COMPLEXITY + 1} > {MAX_COMPLEXITY}"]
+    assert not complexities("m.py", _branchy(MAX_COMPLEXITY - 1))
+    nested = "class A:\n    def f(self):\n" + textwrap.indent(_branchy(MAX_COMPLEXITY), "        ") + "        return branchy\n"
+    assert [v.what.split(" of ")[0] for v in complexities("m.py", nested)] == ["function A.f.branchy"]
+
+
+SYNTHETIC_OFFENDER: str = """
+import skysh.dering
+import skysh.fit as fitting
+from skysh import runtime, sh, _checks
+from skysh.preetham import _luminance_scale, luminance
+from skysh.runtime import SkySH
+from report.common import _helper
+
+def f(sky, obj, monkeypatch):
+    a = fitting._solve(1)                       # module private through an alias
+    b = skysh.dering._NEWTON_STEPS              # through the dotted package path
+    c = runtime._X_SCALE, SkySH._private        # module and class privates
+    d = sky._plans                              # a known instance private
+    e = obj._lmax                               # an instance private a skysh class assigns
+    monkeypatch.setattr(skysh.dering, "_NEWTON_STEPS", 3)
+    ok = sh.__name__, _checks.check_positive_int, luminance, sh.eval_basis
+    return a, b, c, d, e, ok
+"""
+"""A module that reaches into other modules' privates in every way the checker knows (and a few ways it must allow)."""
+
+
+def test_negative_control_reach_ins():
+    modules = frozenset({"skysh", "skysh.dering", "skysh.fit", "skysh.runtime", "skysh.sh", "skysh._checks",
+                         "skysh.preetham", "report", "report.common", "tools_module"})
+    found = reach_ins("m.py", ast.parse(SYNTHETIC_OFFENDER), "tools_module", modules=modules,
+                      instance_names={"_lmax": "skysh.runtime"})
+    whats = sorted(v.what for v in found)
+    expected = [
+        "from report.common import _helper", "from skysh.preetham import _luminance_scale",
+        "fitting._solve", "skysh.dering._NEWTON_STEPS", "runtime._X_SCALE", "SkySH._private",
+        "sky._plans", "obj._lmax", "setattr(skysh.dering, '_NEWTON_STEPS')",
+    ]
+    for needle in expected:
+        assert any(w.startswith(needle) for w in whats), (needle, whats)
+    assert len(found) == len(expected), whats  # nothing else: dunders, public names, `from skysh import _checks`
+    # a module's own privates, and a name it assigns to its own objects, are its business
+    own = "import skysh.fit as me\nclass K:\n    def __init__(self):\n        self._plans = 1\n" \
+          "    def g(self, other):\n        return other._plans, self._plans\n"
+    assert reach_ins("m.py", ast.parse(own), "skysh.fit", modules=modules, instance_names={}) == []
+
+
+@pytest.mark.parametrize("relative", ["from . import _x", "from .common import _y"])
+def test_negative_control_relative_imports(relative):
+    modules = frozenset({"report", "report.common", "report.run"})
+    assert reach_ins("m.py", ast.parse(relative), "report.run", modules=modules, instance_names={})
