@@ -199,19 +199,8 @@ def _add_export_parser(commands: Any) -> None:
     export.set_defaults(handler=_cmd_export)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The parser of the ``skysh`` command (subcommands coeffs, export, render, fit, report)."""
-    from skysh._version import __version__
-
-    parser = _Parser(
-        prog="skysh",
-        description="Spherical-harmonic lighting of the Preetham sky (Habel et al. 2008). Angles in degrees; "
-        "radiance in cd/m^2, linear sRGB by default.",
-        epilog="Every refusal prints one line 'skysh: error: ...' and exits with status 2.",
-    )
-    parser.add_argument("--version", action="version", version=f"skysh {__version__}")
-    commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-
+def _add_coeffs_parser(commands: Any) -> None:
+    """``skysh coeffs``: the sky's SH coefficients for one frame, or the sun as a directional light."""
     coeffs = commands.add_parser(
         "coeffs", help="the sky's SH coefficients for one frame",
         description="The sky's SH coefficients for one sun position and turbidity: (N*N) rows x (R, G, B), "
@@ -250,8 +239,9 @@ def build_parser() -> argparse.ArgumentParser:
     units.add_argument("--normalise", action="store_true", help=_NORMALISE_HELP)
     coeffs.set_defaults(handler=_cmd_coeffs)
 
-    _add_export_parser(commands)
 
+def _add_render_parser(commands: Any) -> None:
+    """``skysh render``: a PNG of the sky, its SH reconstruction and the irradiance."""
     render = commands.add_parser(
         "render", help="PNG of the true sky, its SH reconstruction and the irradiance",
         description="Three latitude-longitude panels side by side: the Preetham sky, its SH reconstruction and "
@@ -271,6 +261,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_lights(render)
     render.set_defaults(handler=_cmd_render)
 
+
+def _add_view_parser(commands: Any) -> None:
+    """``skysh view``: the interactive viewer page, served on 127.0.0.1 or written to a folder."""
     view = commands.add_parser(
         "view", help="an interactive page in the browser: the sky, its SH and the irradiance, live",
         description="Serve the viewer page on 127.0.0.1 (only its own files; Ctrl-C stops it), or write it as "
@@ -283,6 +276,25 @@ def build_parser() -> argparse.ArgumentParser:
                       "one)")
     view.add_argument("--open", action="store_true", help="open the page in the default browser")
     view.set_defaults(handler=_cmd_view)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The parser of the ``skysh`` command (subcommands coeffs, export, render, fit, report)."""
+    from skysh._version import __version__
+
+    parser = _Parser(
+        prog="skysh",
+        description="Spherical-harmonic lighting of the Preetham sky (Habel et al. 2008). Angles in degrees; "
+        "radiance in cd/m^2, linear sRGB by default.",
+        epilog="Every refusal prints one line 'skysh: error: ...' and exits with status 2.",
+    )
+    parser.add_argument("--version", action="version", version=f"skysh {__version__}")
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+
+    _add_coeffs_parser(commands)
+    _add_export_parser(commands)
+    _add_render_parser(commands)
+    _add_view_parser(commands)
 
     for name, script in TOOL_COMMANDS.items():
         commands.add_parser(name, add_help=False, help=f"run tools/{script} with the remaining arguments (source "
@@ -400,15 +412,7 @@ def _cmd_coeffs(args: argparse.Namespace) -> int:
     from skysh._version import __version__
 
     sky = SkySH.load()
-    _check_bands(args.bands, sky)
-    _check_colourspace(args.colourspace, sky)
-    if args.engine is not None:
-        _check_engine_options(args, sky)
-    elif args.format == "snippet":
-        raise _UsageError("--format snippet needs --engine NAME (the snippet is written in that engine's language)")
-    if args.sun_light and args.sun:
-        raise _UsageError("--sun-light does not go with --sun: it prints the sun as a directional light, to use with SH "
-                          "without the sun (else the sun counts twice)")
+    _check_coeffs_options(args, sky)
     diffuse = args.irradiance or args.engine is not None
     gibbs = not diffuse if args.gibbs is None else args.gibbs
     dering = diffuse if args.dering is None else args.dering
@@ -419,16 +423,7 @@ def _cmd_coeffs(args: argparse.Namespace) -> int:
                          ground_albedo=args.ground_albedo, irradiance_table=table)
     if args.up == "y":
         c = sh.to_y_up(c)
-    units = "cd/m^2*sr" if args.irradiance else "cd/m^2"
-    scale = 1.0
-    if args.exposure is not None:
-        scale = args.exposure
-        units = f"{units} x {number_text(scale)}"
-        c = _scaled(c, scale, f"--exposure {number_text(scale)}", args.format)
-    elif args.normalise:
-        scale = normalise_factor(c, args.irradiance)
-        units = f"relative ({units} x {scale:.9g}: irradiance DC, R+G+B average, = 1)"
-        c = _scaled(c, scale, "--normalise", args.format)
+    c, scale, units = _coeffs_scaled(c, args)
     info: dict[str, Any] = {  # sun degrees as given (or computed from the place and time)
         "skysh_version": __version__, "quantity": "irradiance" if args.irradiance else "radiance", "bands": args.bands,
         "sun_zenith_deg": sun.zenith_deg, "sun_azimuth_deg": sun.azimuth_deg, "sun_zenith_rad": sun.zenith,
@@ -444,6 +439,34 @@ def _cmd_coeffs(args: argparse.Namespace) -> int:
     else:
         print(format_coefficients(c, args.format, info))
     return 0
+
+
+def _check_coeffs_options(args: argparse.Namespace, sky: Any) -> None:
+    """Refuse the options of ``skysh coeffs`` that ``sky`` cannot serve or that do not go together."""
+    _check_bands(args.bands, sky)
+    _check_colourspace(args.colourspace, sky)
+    if args.engine is not None:
+        _check_engine_options(args, sky)
+    elif args.format == "snippet":
+        raise _UsageError("--format snippet needs --engine NAME (the snippet is written in that engine's language)")
+    if args.sun_light and args.sun:
+        raise _UsageError("--sun-light does not go with --sun: it prints the sun as a directional light, to use with SH "
+                          "without the sun (else the sun counts twice)")
+
+
+def _coeffs_scaled(c: NDArray[np.float64], args: argparse.Namespace) -> tuple[NDArray[np.float64], float, str]:
+    """The coefficients times ``--exposure`` or the ``--normalise`` factor, that factor (1 without either) and the units."""
+    units = "cd/m^2*sr" if args.irradiance else "cd/m^2"
+    scale = 1.0
+    if args.exposure is not None:
+        scale = args.exposure
+        units = f"{units} x {number_text(scale)}"
+        c = _scaled(c, scale, f"--exposure {number_text(scale)}", args.format)
+    elif args.normalise:
+        scale = normalise_factor(c, args.irradiance)
+        units = f"relative ({units} x {scale:.9g}: irradiance DC, R+G+B average, = 1)"
+        c = _scaled(c, scale, "--normalise", args.format)
+    return c, scale, units
 
 
 def _sun_light_text(sky: Any, sun: _Sun, args: argparse.Namespace, scale: float, info: dict[str, Any]) -> str:

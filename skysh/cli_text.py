@@ -120,33 +120,53 @@ def format_coefficients(coefficients: NDArray[np.float64], fmt: str, info: dict[
 
     rows = lm_rows(math.isqrt(len(coefficients)))
     values = [[float(v) for v in row] for row in coefficients]
-    n = len(values)
     if fmt == "json":
         text = json.dumps({"coefficients": values, "lm": [list(lm) for lm in rows], **info}, indent=1)
         return ONE_LINE_LISTS.sub(lambda match: "[" + " ".join(match.group(1).split()) + "]", text)  # a row per line
     if fmt == "csv":
         lines = ["i,l,m,R,G,B"] + [f"{i},{l},{m}," + ",".join(map(repr, v)) for i, ((l, m), v) in enumerate(zip(rows, values))]
         return "\n".join(lines)
+    context = _coefficients_context(info)
+    if fmt == "table":
+        return _coefficients_table(rows, values, context)
+    if fmt == "c":
+        return _coefficients_c(rows, values, context)
+    return _coefficients_shader(rows, values, context, fmt)
+
+
+def _coefficients_context(info: dict[str, Any]) -> list[str]:
+    """The header lines of the commented formats: what was computed, the units and colourspace, the convention."""
     degrees = number_text if "place" not in info else (lambda value: f"{value:.6g}")  # echo what the user typed
     summary = (f"skysh {info['skysh_version']}: {info['quantity']} SH of the Preetham sky, {plural(info['bands'], 'band')}; "
                f"sun zenith {degrees(info['sun_zenith_deg'])} deg, azimuth {degrees(info['sun_azimuth_deg'])} deg, "
                f"turbidity {number_text(info['turbidity'])}; {settings_text(info)}")
-    context = [summary, f"units: {info['units']}; colourspace: {info['colourspace']} (linear)", info["convention"]]
-    if fmt == "table":
-        zero = TABLE_ZERO_BELOW * max(abs(x) for x in values[0])
-        context.append(f"values below {TABLE_ZERO_BELOW:g} x |DC| ({zero:.3g}) are printed as 0 (rounding noise); "
-                       "--format json or csv: full precision")
-        header = f"{'i':>3} {'l':>2} {'m':>3} {'R':>15} {'G':>15} {'B':>15}"
-        body = [f"{i:>3} {l:>2} {m:>3} " + " ".join(f"{(x if abs(x) >= zero else 0.0):>15.7g}" for x in v)
-                for i, ((l, m), v) in enumerate(zip(rows, values))]
-        return "\n".join(["# " + line for line in context] + [header] + body)
-    if fmt == "c":
-        body = [f"    {{{', '.join(map(repr, v))}}}, /* {i}: l={l}, m={m} */" for i, ((l, m), v) in enumerate(zip(rows, values))]
-        comment = ["/* " + line + " */" for line in context]
-        return "\n".join(comment + [f"static const double SKY_SH[{n}][3] = {{"] + body + ["};"])
-    # glsl / hlsl: float32, shortest round-trip text
+    return [summary, f"units: {info['units']}; colourspace: {info['colourspace']} (linear)", info["convention"]]
+
+
+def _coefficients_table(rows: list[tuple[int, int]], values: list[list[float]], context: list[str]) -> str:
+    """``--format table``: the commented header and one labelled row per coefficient, noise below the threshold as 0."""
+    zero = TABLE_ZERO_BELOW * max(abs(x) for x in values[0])
+    context = context + [f"values below {TABLE_ZERO_BELOW:g} x |DC| ({zero:.3g}) are printed as 0 (rounding noise); "
+                         "--format json or csv: full precision"]
+    header = f"{'i':>3} {'l':>2} {'m':>3} {'R':>15} {'G':>15} {'B':>15}"
+    body = [f"{i:>3} {l:>2} {m:>3} " + " ".join(f"{(x if abs(x) >= zero else 0.0):>15.7g}" for x in v)
+            for i, ((l, m), v) in enumerate(zip(rows, values))]
+    return "\n".join(["# " + line for line in context] + [header] + body)
+
+
+def _coefficients_c(rows: list[tuple[int, int]], values: list[list[float]], context: list[str]) -> str:
+    """``--format c``: a commented double array ``SKY_SH[N*N][3]``, full precision."""
+    n = len(values)
+    body = [f"    {{{', '.join(map(repr, v))}}}, /* {i}: l={l}, m={m} */" for i, ((l, m), v) in enumerate(zip(rows, values))]
+    comment = ["/* " + line + " */" for line in context]
+    return "\n".join(comment + [f"static const double SKY_SH[{n}][3] = {{"] + body + ["};"])
+
+
+def _coefficients_shader(rows: list[tuple[int, int]], values: list[list[float]], context: list[str], fmt: str) -> str:
+    """``--format glsl`` or ``hlsl``: a commented float32 constant array ``SKY_SH``, shortest round-trip text."""
     from skysh.export import float32_literal
 
+    n = len(values)
     vec3 = "vec3" if fmt == "glsl" else "float3"
     items = [f"    {vec3}({', '.join(float32_literal(x) for x in v)})" for v in values]
     labels = [f" // {i}: l={l}, m={m}" for i, (l, m) in enumerate(rows)]
@@ -211,25 +231,15 @@ def format_sun_light(direction: ArrayLike, rgb: ArrayLike, fmt: str, info: dict[
 
     import numpy as np
 
-    from skysh import sh
     from skysh._checks import as_float_array, check_choice
 
     check_choice(fmt, "fmt", ("table", "json", "csv", "glsl", "hlsl", "c") + (("snippet",) if engine else ()))
     d = as_float_array(direction, "direction")
-    light: dict[str, Any] = {}
-    if engine is not None:
-        from skysh.engine_sun import SUN_UNITS, sun_preset, sun_snippet
+    if engine is not None and fmt == "snippet":
+        from skysh.engine_sun import sun_snippet
 
-        if fmt == "snippet":
-            return sun_snippet(d, rgb, engine)
-        preset = sun_preset(d, rgb, engine)
-        light = {"engine_light_colour": [float(v) for v in preset.colour], "engine_light_intensity": preset.intensity,
-                 "engine_light_intensity_unit": SUN_UNITS[engine] + " (skysh.engine_sun)"}
-        d, frame = preset.direction, f"the {engine} frame (skysh.engines.sun_direction; docs/engines.md)"
-    elif up == "y":
-        d, frame = sh.Y_UP_MATRIX @ d, "Y up (zenith +Y), right-handed as glTF: skysh's +X stays, +Y becomes -Z"
-    else:
-        frame = "Z up (zenith), azimuth from +X towards +Y"
+        return sun_snippet(d, rgb, engine)
+    d, frame, light = _sun_light_frame(d, rgb, engine, up)
     info = {"quantity": "the sun as a directional light (Preetham 1999 appendix): the unit vector towards it and its "
             "RGB illuminance at normal incidence; the light shines along minus the vector", "frame": frame, **info}
     dl, el = [float(v) for v in d], [float(v) for v in np.asarray(rgb)]
@@ -241,6 +251,31 @@ def format_sun_light(direction: ArrayLike, rgb: ArrayLike, fmt: str, info: dict[
             lines += [("engine_light_colour", light["engine_light_colour"]),
                       ("engine_light_intensity", [light["engine_light_intensity"]])]
         return "quantity,x_or_R,y_or_G,z_or_B\n" + "\n".join(f"{name}," + ",".join(map(repr, v)) for name, v in lines)
+    return _sun_light_commented(dl, el, light, info, fmt)
+
+
+def _sun_light_frame(d: NDArray[np.float64], rgb: ArrayLike, engine: str | None,
+                     up: str) -> tuple[NDArray[np.float64], str, dict[str, Any]]:
+    """
+    The direction ``d`` (skysh's frame) in the output frame, that frame's description, and with an engine
+    its light colour and intensity (:func:`skysh.engine_sun.sun_preset`; else an empty dict).
+    """
+    from skysh import sh
+
+    if engine is not None:
+        from skysh.engine_sun import SUN_UNITS, sun_preset
+
+        preset = sun_preset(d, rgb, engine)
+        light = {"engine_light_colour": [float(v) for v in preset.colour], "engine_light_intensity": preset.intensity,
+                 "engine_light_intensity_unit": SUN_UNITS[engine] + " (skysh.engine_sun)"}
+        return preset.direction, f"the {engine} frame (skysh.engines.sun_direction; docs/engines.md)", light
+    if up == "y":
+        return sh.Y_UP_MATRIX @ d, "Y up (zenith +Y), right-handed as glTF: skysh's +X stays, +Y becomes -Z", {}
+    return d, "Z up (zenith), azimuth from +X towards +Y", {}
+
+
+def _sun_light_commented(dl: list[float], el: list[float], light: dict[str, Any], info: dict[str, Any], fmt: str) -> str:
+    """The sun light as ``--format`` table, c, glsl or hlsl: every parameter as a comment line, then the numbers."""
     info = {**info, **{key: value for key, value in light.items() if key != "engine_light_colour"}}
     if light:
         info["engine_light_colour"] = " ".join(f"{v:.9g}" for v in light["engine_light_colour"])

@@ -212,12 +212,11 @@ times :data:`LINEAR_ATTENUATION`."""
 
 
 _ONES3: NDArray[np.float64] = np.ones(3)
-_ONES_R: NDArray[np.float64] = np.ones(len(RADIANCE_WINDOW_SIZES))
 
 
-def _first(ok: NDArray) -> NDArray:
-    """The least row r with ok[:, :, r] in every channel, per function; R if none."""
-    ok = np.logical_and.reduce(ok, 1)
+def _first(values: NDArray, floor: float) -> NDArray:
+    """The least row r with values[:, :, r] >= floor in every channel, per function; R if none."""
+    ok = np.minimum.reduce(values, 1) >= floor
     return np.where(ok.any(-1), np.argmax(ok, -1), ok.shape[-1])
 
 
@@ -232,7 +231,7 @@ def _least_row3(t: NDArray, rows: _Rows) -> NDArray:
     gam = (cg[..., None, 1:] @ v)[..., 0, :]
     a, d, c0 = 0.25 * gam * gam, lam - lam[..., :1], cg[..., 0]
     x = np.maximum(np.sqrt(a @ _ONES3), shmin.FLOOR)
-    ok = np.logical_and.reduce(shmin.dual(c0, lam, d, a, x) >= shmin.ALLOWANCE, 1)
+    ok = np.minimum.reduce(shmin.dual(c0, lam, d, a, x), 1) >= shmin.ALLOWANCE
     if ok.all():
         return np.zeros(len(t), dtype=np.intp)
     todo = np.flatnonzero(~ok) if ok.any() else slice(None)
@@ -241,15 +240,16 @@ def _least_row3(t: NDArray, rows: _Rows) -> NDArray:
     c0 = c0[todo, :, None]
     x = shmin.newton(d, a, shmin.prefix_bound(d, a), 1)
     w = 1.0 / (d + x[..., None])
-    first = _first(c0 + lam[..., 0] - x - (a * w) @ _ONES3 >= shmin.ALLOWANCE)
+    first = _first(c0 + lam[..., 0] - x - (a * w) @ _ONES3, shmin.ALLOWANCE)
     y = gam * w  # -2 times the dual's point: the value at y / |y|
     n2 = (y * y) @ _ONES3 + shmin.TINY
-    refuted = np.logical_or.reduce(c0 - (gam * y) @ _ONES3 / np.sqrt(n2) + (lam * y * y) @ _ONES3 / n2 < 0.0, 1)
-    left = np.flatnonzero(np.logical_and.accumulate(refuted, -1) @ _ONES_R[: refuted.shape[-1]] < first)
+    refuted = np.minimum.reduce(c0 - (gam * y) @ _ONES3 / np.sqrt(n2) + (lam * y * y) @ _ONES3 / n2, 1) < 0.0
+    lead = np.where(refuted.all(-1), refuted.shape[-1], np.argmin(refuted, -1))  # rows refuted before the first not
+    left = np.flatnonzero(lead < first)
     if left.size:
         d, a, lam, c0, x = d[left], a[left], lam[left], c0[left], x[left]
         x = shmin.newton(d, a, shmin.cluster_bounds(d, a, x), shmin.NEWTON_STEPS)
-        first[left] = _first(shmin.dual(c0, lam, d, a, x) >= shmin.ALLOWANCE)
+        first[left] = _first(shmin.dual(c0, lam, d, a, x), shmin.ALLOWANCE)
     if isinstance(todo, slice):
         return first
     out = np.zeros(len(t), dtype=np.intp)

@@ -223,7 +223,8 @@ class LitPlan:
     """
 
     __slots__ = ("bands", "k_half", "width", "depth", "nx", "y_slice", "angle_map", "table_x", "gather", "rotation",
-                 "zonal_rows", "ground_rows", "window_l", "rgb_from_xyz", "rgb_rows", "sky")
+                 "zonal_rows", "ground_rows", "window_l", "rgb_from_xyz", "rgb_rows", "sky", "readback", "gather5",
+                 "rotation5")
 
     def __init__(self, sky_plan: Any, sun_named: Any, rgb_from_xyz: ArrayLike | None, gibbs: bool) -> None:
         from skysh.solar import (
@@ -271,13 +272,28 @@ class LitPlan:
         self.window_l = np.asarray(window)[sh.band_of_index(bands)][:, None]
         self.rgb_from_xyz = np.eye(3) if rgb_from_xyz is None else np.array(rgb_from_xyz, dtype=np.float64)
         self.rgb_rows: tuple[tuple[float, ...], ...] = tuple(tuple(row) for row in self.rgb_from_xyz.tolist())
+        # fused: b's flat indices of the sky's c_10 (row 0) and the sun's ln XYZ (row 1), read back together;
+        # X (N^2, 5) = b.ravel()[gather5] * packed[rotation5] holds, per output value, the sky's three channels,
+        # the sun's Ybar and the ground's factor, each rotated (eq. 4); the result is X @ V with V (5, 3) =
+        # [lum I; sun RGB; ground RGB] (Python floats), so sun, ground and the luminance scale are one product.
+        c = width + 3
+        self.readback = np.array([w_ for w_ in range(width - 3, width)] + [c + w_ for w_ in range(width, width + 3)],
+                                 dtype=np.intp)
+        source = np.asarray(sky_plan.gather)[:, 0] // 3  # m >= 0 row of every output value
+        self.gather5 = np.concatenate([np.asarray(sky_plan.gather), (2 * c + 2 * source)[:, None],
+                                       (2 * c + 2 * source + 1)[:, None]], axis=1).astype(np.intp)
+        self.rotation5 = np.ascontiguousarray(self.rotation[:, :1].repeat(5, axis=1))
         for array in (self.table_x, self.angle_map, self.rotation, self.zonal_rows, self.ground_rows, self.window_l,
-                      self.rgb_from_xyz):
+                      self.rgb_from_xyz, self.readback, self.gather5, self.rotation5):
             array.flags.writeable = False
 
     # ------------------------------------------------------------------ #
-    def _evaluate(self, ts: float, t: float, phi: float, x: float, y: float, sun: bool) -> tuple:
-        """Shared scalar step: packed factors, b (3, C), the luminance scale, sun RGB and E_h, both / lum."""
+    def _evaluate(self, ts: float, t: float, phi: float, x: float, y: float,
+                  sun: bool) -> tuple[NDArray[np.float64], NDArray[np.float64], float, tuple, tuple]:
+        """Shared scalar step: packed factors, b (3, C), the luminance scale, the sun's RGB and E_h (lux).
+
+        b[0] holds the sky's m >= 0 coefficients and its unfiltered c_10 over the luminance scale, b[1]
+        the sun's ln XYZ, b[2] the (K_half, 2) matrix [sun's windowed Ybar(ts), ground's zonal factor]."""
         m = 1.0 / (math.cos(ts) + _A * (_B - ts * _DEG) ** _NEG_C)  # Kasten's air mass (skysh.sunlight)
         xs = (m - _M0) * _SX_SCALE - 1.0
         ys = (t - _TMIN) * _SY_SCALE - 1.0
@@ -286,20 +302,20 @@ class LitPlan:
                   1.0, ts, math.acos(xs if -1.0 < xs < 1.0 else math.copysign(1.0, xs)),
                   math.acos(ys if -1.0 < ys < 1.0 else math.copysign(1.0, ys)))
         packed = np.cos(np.dot(self.angle_map, np.array(angles)))
-        depth, w = self.depth, self.width
+        depth = self.depth
         a = np.dot(packed[: self.nx], self.table_x)
-        b = np.dot(packed[self.y_slice].reshape(3, depth + 1), a.reshape(depth + 1, w + 3))
+        b = np.dot(packed[self.y_slice].reshape(3, depth + 1), a.reshape(depth + 1, -1))
         lum = luminance_scale_unchecked(ts, t)
-        (c0, c1, c2, _, _, _), (_, _, _, lx, ly, lz) = b[:2, w - 3 :].tolist()  # the sky's c_10; the sun's ln XYZ
-        if sun:  # Python floats: cheaper than numpy for three values; all over lum, as the sky's b
-            inv = 1.0 / lum
-            ex, ey, ez = math.exp(lx) * inv, math.exp(ly) * inv, math.exp(lz) * inv
+        c0, c1, c2, lx, ly, lz = b.ravel()[self.readback].tolist()  # the sky's c_10 (over lum); the sun's ln XYZ
+        if sun:  # Python floats: cheaper than numpy for three values
+            ex, ey, ez = math.exp(lx), math.exp(ly), math.exp(lz)
             (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = self.rgb_rows
             rgb = (r00 * ex + r01 * ey + r02 * ez, r10 * ex + r11 * ey + r12 * ez, r20 * ex + r21 * ey + r22 * ez)
-            cos_ts = math.cos(ts)
-            e_h = (_HF * c0 + cos_ts * rgb[0], _HF * c1 + cos_ts * rgb[1], _HF * c2 + cos_ts * rgb[2])
+            cos_ts, hf = math.cos(ts), _HF * lum
+            e_h = (hf * c0 + cos_ts * rgb[0], hf * c1 + cos_ts * rgb[1], hf * c2 + cos_ts * rgb[2])
         else:
-            rgb, e_h = (0.0, 0.0, 0.0), (_HF * c0, _HF * c1, _HF * c2)
+            hf = _HF * lum
+            rgb, e_h = (0.0, 0.0, 0.0), (hf * c0, hf * c1, hf * c2)
         return packed, b, lum, rgb, e_h
 
     def fused(self, ts: float, t: float, phi: float, x: float, y: float, sun: bool,
@@ -309,32 +325,28 @@ class LitPlan:
         ``x``, ``y``: the sky's Chebyshev variables (the runtime computes them); ``phi`` reduced mod 2 pi.
         """
         packed, b, lum, (r, g, bl), e_h = self._evaluate(ts, t, phi, x, y, sun)
-        delta = (r if r > SUN_SH_CLAMP else SUN_SH_CLAMP, g if g > SUN_SH_CLAMP else SUN_SH_CLAMP,
-                 bl if bl > SUN_SH_CLAMP else SUN_SH_CLAMP)
         if albedo is None:
-            ground_rgb = (0.0, 0.0, 0.0)
+            gr = gg = gb = 0.0
         else:
-            ground_rgb = (albedo[0] * e_h[0] * _INV_PI, albedo[1] * e_h[1] * _INV_PI, albedo[2] * e_h[2] * _INV_PI)
-        k2, w = 2 * self.k_half, self.width
-        half = b[0, : w - 3]
-        half += np.dot(b[2, :k2].reshape(self.k_half, 2), np.array((delta, ground_rgb))).ravel()
-        out = half[self.gather]  # (N^2, 3): m < 0 values from their m > 0 partners
-        out *= packed[self.rotation]  # eq. (4), the sky and the sun alike
-        out *= lum
-        return out
+            gr, gg, gb = albedo[0] * e_h[0] * _INV_PI, albedo[1] * e_h[1] * _INV_PI, albedo[2] * e_h[2] * _INV_PI
+        mix = np.array((lum, 0.0, 0.0, 0.0, lum, 0.0, 0.0, 0.0, lum, r if r > SUN_SH_CLAMP else SUN_SH_CLAMP,
+                        g if g > SUN_SH_CLAMP else SUN_SH_CLAMP, bl if bl > SUN_SH_CLAMP else SUN_SH_CLAMP, gr, gg, gb))
+        parts = b.ravel()[self.gather5]  # (N^2, 5): sky RGB, sun's Ybar, ground's factor; m < 0 from m > 0
+        parts *= packed[self.rotation5]  # eq. (4), the sky, the sun and the ground alike
+        return np.dot(parts, mix.reshape(5, 3))
 
     def parts(self, ts: float, t: float, phi: float, x: float, y: float,
               sun: bool) -> tuple[NDArray[np.float64], NDArray[np.float64] | None, NDArray[np.float64]]:
         """The sky (N * N, 3), the sun's windowed SH (or None) and E_h (3,), separately (for deringing
         or a colourspace conversion between them)."""
         packed, b, lum, rgb, e_h = self._evaluate(ts, t, phi, x, y, sun)
-        rotation = packed[self.rotation] * lum
-        sky = b[0, : self.width - 3][self.gather] * rotation
+        rotation = packed[self.rotation]
+        sky = b[0, : self.width - 3][self.gather] * (rotation * lum)
         sun_sh = None
         if sun:
-            delta = np.maximum(np.array(rgb), SUN_SH_CLAMP / lum)
+            delta = np.maximum(np.array(rgb), SUN_SH_CLAMP)
             sun_sh = np.outer(b[2, : 2 * self.k_half : 2], delta).ravel()[self.gather] * rotation
-        return sky, sun_sh, np.array(e_h) * lum
+        return sky, sun_sh, np.array(e_h)
 
     def sun_batch(self, ts: NDArray, phi: NDArray, rgb: NDArray) -> NDArray[np.float64]:
         """(n, N * N, 3): the windowed delta of ``rgb`` (n, 3) lux towards (ts, phi) (n,), clamped as :meth:`fused`."""

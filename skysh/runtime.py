@@ -291,16 +291,8 @@ class SkySH:
         ``irradiance_table=True`` without the table, with ``bands`` other than 3 or ``gibbs=True``.
         TypeError for ``gibbs``, ``dering``, ``irradiance``, ``sun`` or ``irradiance_table`` not a bool.
         """
-        irradiance = check_flag(irradiance, "irradiance")
-        gibbs = gibbs if gibbs is None else check_flag(gibbs, "gibbs")
-        dering = dering if dering is None else check_flag(dering, "dering")
-        table = self._use_table(irradiance_table, irradiance, bands, gibbs, dering)
-        gibbs = not (irradiance or table) if gibbs is None else gibbs
-        dering = irradiance if dering is None else dering
-        sun = sun if sun is False else check_flag(sun, "sun")
-        albedo = None if type(ground_albedo) is float and ground_albedo == 0.0 else lights.check_albedo(ground_albedo)
-        if colourspace is not None and not isinstance(colourspace, str):  # before any work, naming it
-            raise ValueError(f"colourspace must be None or a colour-science RGB colourspace name, got {short_repr(colourspace)}")
+        irradiance, gibbs, dering, table, sun, albedo = self._options(
+            irradiance, gibbs, dering, irradiance_table, bands, sun, ground_albedo, colourspace)
         ts, t, phi = real_scalar(sun_zenith), real_scalar(turbidity), real_scalar(sun_azimuth)
         scalar = ts is not None and t is not None and phi is not None
         if sun or albedo is not None:
@@ -321,6 +313,22 @@ class SkySH:
         if colourspace is not None and colourspace != self.colourspace:
             out = out @ self._colour_matrix(colourspace).T
         return out
+
+    def _options(self, irradiance: Any, gibbs: Any, dering: Any, irradiance_table: Any, bands: Any, sun: Any,
+                 ground_albedo: Any, colourspace: Any) -> tuple[bool, bool, bool, bool, bool, Any]:
+        """The options of :meth:`coefficients` checked and resolved by intent: (irradiance, gibbs, dering,
+        table, sun, albedo or None)."""
+        irradiance = check_flag(irradiance, "irradiance")
+        gibbs = gibbs if gibbs is None else check_flag(gibbs, "gibbs")
+        dering = dering if dering is None else check_flag(dering, "dering")
+        table = self._use_table(irradiance_table, irradiance, bands, gibbs, dering)
+        gibbs = not (irradiance or table) if gibbs is None else gibbs
+        dering = irradiance if dering is None else dering
+        sun = sun if sun is False else check_flag(sun, "sun")
+        albedo = None if type(ground_albedo) is float and ground_albedo == 0.0 else lights.check_albedo(ground_albedo)
+        if colourspace is not None and not isinstance(colourspace, str):  # before any work, naming it
+            raise ValueError(f"colourspace must be None or a colour-science RGB colourspace name, got {short_repr(colourspace)}")
+        return irradiance, gibbs, dering, table, sun, albedo
 
     def _table_colour(self, out: NDArray, colourspace: str | None, dering: bool, irradiance: bool) -> NDArray:
         """The table's result in ``colourspace``, deringed after a conversion whose matrix mixes signs (``dering``)."""

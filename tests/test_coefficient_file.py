@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from conftest import canonical_json
 
 from skysh import coefficient_file as cf
 from skysh import poly, sunlight
@@ -38,11 +39,6 @@ ENTRIES: tuple[str, ...] = ("format", "format_version", "table", "degrees", "sun
 
 SRGB_FROM_XYZ: list[list[float]] = [[3.2406, -1.5372, -0.4986], [-0.9689, 1.8758, 0.0415], [0.0557, -0.2040, 1.0570]]
 """An XYZ -> RGB matrix for the synthetic tables (IEC 61966-2-1's rounded sRGB; any 3 x 3 within bounds would do)."""
-
-
-def _canonical(value: Any) -> bytes:
-    """Canonical JSON as the module docstring defines it, typed here."""
-    return json.dumps(value, sort_keys=True, separators=(",", ":"), ensure_ascii=True, allow_nan=False).encode("ascii")
 
 
 @pytest.fixture(scope="module")
@@ -117,7 +113,7 @@ def _rehashed(entries: dict[str, np.ndarray], **metadata_changes: Any) -> dict[s
     metadata.update(metadata_changes)
     tables = {name: cf.NamedTable(entries[f"{name}_table"], entries[f"{name}_degrees"]) for name in ("sun", "irradiance")}
     metadata[cf.HASH_KEY] = cf.content_sha256(entries["table"], entries["degrees"], metadata, tables)
-    return dict(entries, metadata=np.frombuffer(_canonical(metadata), dtype=np.uint8))
+    return dict(entries, metadata=np.frombuffer(canonical_json(metadata), dtype=np.uint8))
 
 
 class TestRoundTrip:
@@ -176,7 +172,7 @@ class TestRoundTrip:
             assert data["irradiance_degrees"].dtype == np.int64 and data["irradiance_degrees"].tolist() == [[4, 2]] * 3
             raw = bytes(data["metadata"])
         metadata = json.loads(raw.decode("ascii"))
-        assert metadata == cf.read(path).metadata and raw == _canonical(metadata)  # canonical JSON, as documented
+        assert metadata == cf.read(path).metadata and raw == canonical_json(metadata)  # canonical JSON, as documented
 
     def test_deterministic_bytes(self, tmp_path: Path) -> None:
         a = cf.write(tmp_path / "a.npz", _small_table()).read_bytes()
@@ -199,7 +195,7 @@ class TestRoundTrip:
         digest.update(back.tables["irradiance"].table.astype("<f8").tobytes())
         digest.update(f"irradiance_degrees <i8 [3, 2] {3 * 2 * 8}\n".encode())
         digest.update(back.tables["irradiance"].degrees.astype("<i8").tobytes())
-        text = _canonical({k: v for k, v in back.metadata.items() if k != cf.HASH_KEY})
+        text = canonical_json({k: v for k, v in back.metadata.items() if k != cf.HASH_KEY})
         digest.update(f"metadata {len(text)}\n".encode() + text)
         assert back.metadata[cf.HASH_KEY] == digest.hexdigest()
         assert cf.content_sha256(back.table, back.degrees, back.metadata, back.tables) == digest.hexdigest()
@@ -310,7 +306,7 @@ class TestRefusals:
         metadata = json.loads(bytes(shipped_entries["metadata"]).decode("ascii"))
         metadata.pop("tables")
         entries = {k: v for k, v in shipped_entries.items() if not k.startswith(("sun_", "irradiance_"))}
-        return dict(entries, metadata=np.frombuffer(_canonical(metadata), dtype=np.uint8))
+        return dict(entries, metadata=np.frombuffer(canonical_json(metadata), dtype=np.uint8))
 
     def test_version_1_names_the_versions(self, tmp_path: Path, shipped_entries: dict) -> None:
         # Version 1 as skysh 0.1.0 wrote it: savez_compressed, metadata a '<U' string, no hash.
@@ -335,7 +331,7 @@ class TestRefusals:
         metadata = json.loads(bytes(shipped_entries["metadata"]).decode("ascii"))
         metadata["tables"].pop("irradiance")
         entries = {k: v for k, v in shipped_entries.items() if not k.startswith("irradiance_")}
-        entries.update(format_version=np.array(3, dtype=np.int64), metadata=np.frombuffer(_canonical(metadata), np.uint8))
+        entries.update(format_version=np.array(3, dtype=np.int64), metadata=np.frombuffer(canonical_json(metadata), np.uint8))
         _refused(_write_raw(tmp_path / "v3.npz", entries),
                  r"format version 3 \(without the irradiance table\) is no longer read: this skysh \(.*\) reads format "
                  r"version 4 only \(hashed, strictly checked, with the sun's and the irradiance tables\); regenerate the "

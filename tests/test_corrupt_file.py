@@ -45,6 +45,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from conftest import canonical_json
 
 from skysh import _npz
 from skysh import coefficient_file as cf
@@ -112,10 +113,6 @@ def _npy(array: np.ndarray) -> bytes:
     return buffer.getvalue()
 
 
-def _canonical(value: Any) -> bytes:
-    return json.dumps(value, sort_keys=True, separators=(",", ":"), ensure_ascii=True, allow_nan=False).encode("ascii")
-
-
 class Content:
     """The shipped file's content, to be changed and written back by the independent writer."""
 
@@ -146,7 +143,7 @@ class Content:
         }
         for name, values in named.items():
             out.update({f"{name}_table.npy": _npy(values.table), f"{name}_degrees.npy": _npy(values.degrees)})
-        out["metadata.npy"] = arrays.get("metadata_bytes", _npy(np.frombuffer(_canonical(metadata), dtype=np.uint8)))
+        out["metadata.npy"] = arrays.get("metadata_bytes", _npy(np.frombuffer(canonical_json(metadata), dtype=np.uint8)))
         return out
 
     def with_sun_block(self, **changes: Any) -> dict[str, Any]:
@@ -387,13 +384,13 @@ class TestChangedNumbers:
     )
     def test_metadata_with_stale_hash(self, tmp_path: Path, content: Content, changes: dict) -> None:
         metadata = dict(content.metadata, **changes)
-        raw = _npy(np.frombuffer(_canonical(metadata), dtype=np.uint8))
+        raw = _npy(np.frombuffer(canonical_json(metadata), dtype=np.uint8))
         if "colourspace" in changes:  # the blocks name the colourspace too: refused as inconsistent first
             _refused_bytes(tmp_path, content.file(metadata_bytes=raw), "colourspace 'sRGB' differs from")
             metadata = dict(content.with_sun_block(**changes), **changes)
             blocks = metadata["tables"]
             metadata["tables"] = {**blocks, "irradiance": {**blocks["irradiance"], **changes}}  # all changed: only the hash
-            raw = _npy(np.frombuffer(_canonical(metadata), dtype=np.uint8))
+            raw = _npy(np.frombuffer(canonical_json(metadata), dtype=np.uint8))
         _refused_bytes(tmp_path, content.file(metadata_bytes=raw), "content hash mismatch")
 
     @pytest.mark.parametrize(
@@ -406,7 +403,7 @@ class TestChangedNumbers:
     def test_sun_block_with_stale_hash(self, tmp_path: Path, content: Content, changes: dict) -> None:
         metadata = content.with_sun_block(**changes)
         assert metadata != content.metadata
-        raw = _npy(np.frombuffer(_canonical(metadata), dtype=np.uint8))
+        raw = _npy(np.frombuffer(canonical_json(metadata), dtype=np.uint8))
         _refused_bytes(tmp_path, content.file(metadata_bytes=raw), "content hash mismatch")
 
 
@@ -522,7 +519,7 @@ class TestMetadataChanges:
     @pytest.mark.parametrize("digest", ["", "0" * 64, "A" * 64, 12, None], ids=["empty", "zeros", "upper", "int", "null"])
     def test_bad_hash_values(self, tmp_path: Path, content: Content, digest: Any) -> None:
         metadata = dict(content.metadata, **{cf.HASH_KEY: digest})
-        raw = _npy(np.frombuffer(_canonical(metadata), dtype=np.uint8))
+        raw = _npy(np.frombuffer(canonical_json(metadata), dtype=np.uint8))
         _refused_bytes(tmp_path, content.file(metadata_bytes=raw), "SHA-256 hex digest|content hash mismatch")
 
     @pytest.mark.parametrize(

@@ -41,14 +41,20 @@ UNREAL_COLOUR_TOL: float = 5e-3
 decoded, is at most 0.5 / 255 x d(linear)/d(sRGB) <= 0.5 / 255 x 2.4 = 4.7e-3 of the largest channel."""
 CONTROL_MIN: float = 0.1
 """The wrong scale is off by pi - 1 times the sun's share of the peak: far more than 10 %."""
+DIRECTION_TOL: float = 1e-15
+"""The engines' own unit vectors (three.js normalises position - target, Babylon stores the direction, both in
+JavaScript doubles) against the preset's float64 vector: a few roundings of components of size <= 1 (eps 2.2e-16)."""
+SCALE_PRODUCT_TOL: float = 4.5e-16
+"""colour x intensity against SUN_SCALES x max(rgb, 0), over the largest channel: one division and one product,
+within 2 ulps of the largest channel (2 x eps = 4.4e-16); a subnormal channel loses its own digits."""
+COLOUR_RATIO_TOL: float = 1e-16
+"""A channel over the largest (2e4 / 1e5 = 0.2): one correctly rounded division, half an ulp of 0.2 (1.4e-17)."""
+INTENSITY_RTOL: float = 1e-15
+"""The intensity 1e5 / pi against this file's float64 1e5 / pi: the same quotient, possibly formed as a product
+with 1 / pi, so a few ulps (eps 2.2e-16) apart."""
 
 FRAMES_UNDER_TEST: tuple[tuple[float, float, float], ...] = ((0.3, 2.5, 0.7), (1.0, 4.0, -2.0), (1.5, 6.0, 2.9))
 """(sun zenith, turbidity, sun azimuth): a high sun, a mid one, one near the horizon (blue clamped)."""
-
-
-@pytest.fixture(scope="module")
-def sky() -> SkySH:
-    return SkySH.load()
 
 
 def srgb_round_trip(c: np.ndarray) -> np.ndarray:
@@ -146,7 +152,7 @@ console.log(JSON.stringify({ threejs: [u.color.toArray(), u.direction.toArray()]
         preset = engine_sun.sun_preset(direction, rgb, engine)
         assert np.abs(np.array(colour) - lux).max() <= EXACT_TOL * lux.max(), engine
         expected = preset.direction if engine == "threejs" else preset.travel
-        np.testing.assert_allclose(towards_or_travel, expected, rtol=0, atol=1e-15, err_msg=engine)
+        np.testing.assert_allclose(towards_or_travel, expected, rtol=0, atol=DIRECTION_TOL, err_msg=engine)
     assert lux[2] == 0.0 and rgb[2] < 0.0  # the clamp was exercised
 
 
@@ -176,15 +182,14 @@ def test_colour_times_intensity_is_the_scaled_clamped_illuminance(rgb: list[floa
     """colour x intensity = SUN_SCALES[engine] x max(rgb, 0) (to rounding), the colour in [0, 1] with max 1 (or 0)."""
     p = engine_sun.sun_preset((0.0, 0.0, 1.0), rgb, engine)
     expected = np.maximum(rgb, 0.0) * engine_sun.SUN_SCALES[engine]
-    # one division and one product: within 2 ulps of the largest channel (a subnormal channel loses its own digits)
-    np.testing.assert_allclose(p.colour * p.intensity, expected, rtol=0.0, atol=4.5e-16 * expected.max())
+    np.testing.assert_allclose(p.colour * p.intensity, expected, rtol=0.0, atol=SCALE_PRODUCT_TOL * expected.max())
     assert p.colour.min() >= 0.0 and p.colour.max() == (1.0 if expected.max() > 0.0 else 0.0)
 
 
 def test_preset_scales_and_colour():
     preset = engine_sun.sun_preset((0.0, 0.0, 1.0), (2.0e4, 1.0e5, -3.0), "unity")
-    np.testing.assert_allclose(preset.colour, [0.2, 1.0, 0.0], rtol=0, atol=1e-16)
-    assert preset.intensity == pytest.approx(1.0e5 / math.pi, rel=1e-15)
+    np.testing.assert_allclose(preset.colour, [0.2, 1.0, 0.0], rtol=0, atol=COLOUR_RATIO_TOL)
+    assert preset.intensity == pytest.approx(1.0e5 / math.pi, rel=INTENSITY_RTOL)
     np.testing.assert_array_equal(preset.direction, engines.sun_direction(0.0, 0.0, "unity"))
     black = engine_sun.sun_preset((0.0, 0.0, 1.0), (0.0, -1.0, 0.0), "threejs")
     assert black.intensity == 0.0 and np.all(black.colour == 0.0)

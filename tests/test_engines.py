@@ -49,6 +49,32 @@ the largest coefficient: 2.1e-5, 5.2e-6, 1.3e-6, 3.2e-7 at 16, 32, 64, 128 texel
 CONTROL_MIN: float = 1e-2
 """Unconverted coefficients must be off by more than 1% of the peak (1000x the six-digit tolerance);
 measured 3.8% (Unreal's map only mirrors y, small for a sun near azimuth 0) to 280%."""
+MAP_TOL: float = 1e-12
+"""engines.convert against this file's own arithmetic of the same numbers (Unity's PackCoefficients: copies,
+one subtraction, a factor 3), over max|c|: a few float64 roundings of terms of size max|c| (2.2e-16 each)."""
+Y_UP_TOL: float = 1e-13
+"""Filament's map against skysh.sh.to_y_up, over max|c|: two routes to the same band rotations (each output at
+most a 5-term sum of products of O(1) entries and coefficients), so a few ulps of max|c| apart."""
+SUM_ORDER_TOL: float = 1e-14
+"""The same map applied in another order, shape or dtype (zero padding, batches, float32 inputs promoted), over
+max|c|: each engine number is a dot product with at most 3 non-zero entries whose absolute sum is below 4
+(test_engine_map_layout), so a reordering moves it by at most 3 x 4 x eps = 2.7e-15 of max|c|."""
+HUGE_RTOL: float = 1e-12
+"""convert(c x 1e200) (the checked path) against convert(c) x 1e200, per entry: scaling by a constant commutes
+with the at most 3-term sums up to a few roundings (eps 2.2e-16 each)."""
+FINITE_MAX: float = 1e6
+"""Largest |value| (coefficients and scale) the affine property test draws."""
+AFFINE_TOL: float = 1e-9
+"""convert(a x + y) against a (convert(x) - b) + convert(y), over (1 + |a|) x FINITE_MAX: both sides round terms
+up to 4 (1 + |a|) FINITE_MAX in at most 3-term sums, about 3 x 4 x eps = 2.7e-15 of that scale; the allowance
+keeps the original test's 1e-9 (never loosened), far above the rounding."""
+SUN_DIRECTION_TOL: float = 1e-15
+"""sun_direction against the documented frame matrix (entries 0 and +-1) times (sin z cos a, sin z sin a, cos z):
+the matrix only permutes and negates, so the two agree up to the rounding of sin and cos, and the norm is 1
+within a few ulps (eps 2.2e-16)."""
+PEAK_PLANE_TOL: float = 1e-6
+"""Distance of the located irradiance peak from the sun's vertical plane (unit vectors): Nelder-Mead stops at
+fatol 1e-14 on a quadratic maximum of O(1) curvature, which pins the position to about sqrt(1e-14) = 1e-7."""
 
 # Engine frames as docs/engines.md states them: engine direction = M @ skysh direction.
 FRAMES: dict[str, np.ndarray] = {
@@ -66,11 +92,6 @@ SKIES: tuple[tuple[float, float, float, bool], ...] = (
     (0.2, 2.5, 0.3, True), (0.9, 4.0, 2.5, False), (1.45, 6.0, -2.2, True), (1.2, 3.0, 4.0, False),
 )
 """(sun zenith, turbidity, sun azimuth, gibbs): high and low suns, every quadrant of azimuth."""
-
-
-@pytest.fixture(scope="module")
-def sky() -> SkySH:
-    return SkySH.load()
 
 
 def make_sets(sky: SkySH) -> list[np.ndarray]:
@@ -406,7 +427,7 @@ def test_unity_shader_is_unity_packed(coefficient_sets: list):
     """unity-shader is PackCoefficients of the unity numbers (exact arithmetic: copies, one subtraction, x3)."""
     for c in coefficient_sets:
         np.testing.assert_allclose(engines.convert(c, "unity-shader"), unity_pack(engines.convert(c, "unity")),
-                                   rtol=0, atol=1e-12 * np.abs(c).max())
+                                   rtol=0, atol=MAP_TOL * np.abs(c).max())
 
 
 def test_unity_ambient_probe_undoes_to_radiance(coefficient_sets: list, dirs: np.ndarray):
@@ -433,7 +454,7 @@ def test_filament_radiance_is_the_y_up_rotation(coefficient_sets: list):
     """Filament's radiance() takes skysh's coefficients rotated to Y up (sh.to_y_up): `--up y` output."""
     for c in coefficient_sets:
         np.testing.assert_allclose(engines.convert(c, "filament"), sh.to_y_up(c), rtol=0,
-                                   atol=1e-13 * np.abs(c).max())
+                                   atol=Y_UP_TOL * np.abs(c).max())
 
 
 # --------------------------------------------------------------------------- #
@@ -487,7 +508,7 @@ def test_sun_is_where_the_irradiance_peaks(sky: SkySH, engine: str):
         normal = np.cross(up, sun)
         normal /= np.linalg.norm(normal)
         horizontal = sun - sun @ up * up
-        assert abs(peak @ normal) < 1e-6, (zenith, azimuth)  # in the sun's vertical plane
+        assert abs(peak @ normal) < PEAK_PLANE_TOL, (zenith, azimuth)  # in the sun's vertical plane
         assert peak @ horizontal > 0 and peak @ up > 0, (zenith, azimuth)  # on the sun's side, above
 
 
@@ -496,12 +517,12 @@ def test_sun_direction_in_documented_frame(engine: str):
     zenith, azimuth = 0.7, 2.1
     d = np.array([math.sin(zenith) * math.cos(azimuth), math.sin(zenith) * math.sin(azimuth), math.cos(zenith)])
     expected = FRAMES[ENGINE_FRAME[engine]] @ d
-    np.testing.assert_allclose(engines.sun_direction(zenith, azimuth, engine), expected, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(engines.sun_direction(zenith, azimuth, engine), expected, rtol=0, atol=SUN_DIRECTION_TOL)
     np.testing.assert_array_equal(engines.ENGINE_FRAMES[engine], FRAMES[ENGINE_FRAME[engine]])
     batch = engines.sun_direction(np.array([0.1, 0.7]), np.array([[2.1], [-0.3]]), engine)
     assert batch.shape == (2, 2, 3)
-    np.testing.assert_allclose(batch[0, 1], expected, rtol=0, atol=1e-15)
-    np.testing.assert_allclose(np.linalg.norm(batch, axis=-1), 1.0, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(batch[0, 1], expected, rtol=0, atol=SUN_DIRECTION_TOL)
+    np.testing.assert_allclose(np.linalg.norm(batch, axis=-1), 1.0, rtol=0, atol=SUN_DIRECTION_TOL)
 
 
 def test_sun_direction_refuses_bad_input():
@@ -546,7 +567,7 @@ def test_fewer_bands_are_the_first_coefficients(coefficient_sets: list, engine: 
         full = engines.convert(padded, engine)
         if engine.startswith("filament"):
             full = full[:k]
-        np.testing.assert_allclose(lower, full, rtol=0, atol=1e-14 * np.abs(c).max())
+        np.testing.assert_allclose(lower, full, rtol=0, atol=SUM_ORDER_TOL * np.abs(c).max())
 
 
 @pytest.mark.parametrize("engine", engines.ENGINES)
@@ -556,16 +577,16 @@ def test_fast_and_general_paths_agree(coefficient_sets: list, engine: str):
     assert fast.shape == engines.engine_map(engine).shape
     for variant in (c.tolist(), np.asfortranarray(c), c[None], c[::-1][::-1].copy()[None, None]):
         other = engines.convert(variant, engine)  # the checked path: same map, summed in another order
-        np.testing.assert_allclose(other.reshape(fast.shape), fast, rtol=0, atol=1e-14 * np.abs(c).max())
+        np.testing.assert_allclose(other.reshape(fast.shape), fast, rtol=0, atol=SUM_ORDER_TOL * np.abs(c).max())
     single = c.astype(np.float32)  # other dtypes take the checked path on their float64 values
     np.testing.assert_allclose(engines.convert(single, engine), engines.convert(single.astype(np.float64), engine),
-                               rtol=0, atol=1e-14 * np.abs(c).max())
+                               rtol=0, atol=SUM_ORDER_TOL * np.abs(c).max())
     huge = c * 1e200  # beyond the fast path's screen (sum x^2 overflows): the checked path, same product
     offset = engines.engine_map(engine).offset.reshape(fast.shape)
-    np.testing.assert_allclose(engines.convert(huge, engine) - offset, (fast - offset) * 1e200, rtol=1e-12)
+    np.testing.assert_allclose(engines.convert(huge, engine) - offset, (fast - offset) * 1e200, rtol=HUGE_RTOL)
 
 
-finite = st.floats(min_value=-1e6, max_value=1e6, allow_nan=False)
+finite = st.floats(min_value=-FINITE_MAX, max_value=FINITE_MAX, allow_nan=False)
 
 
 @settings(max_examples=40, deadline=None)
@@ -576,10 +597,10 @@ def test_convert_is_affine_and_batches(engine: str, values: list, scale: float):
     b = engines.engine_map(engine).offset.reshape(engines.engine_map(engine).shape)
     lhs = engines.convert(scale * x + y, engine)
     rhs = scale * (engines.convert(x, engine) - b) + engines.convert(y, engine)
-    np.testing.assert_allclose(lhs, rhs, rtol=0, atol=1e-9 * (1 + abs(scale)) * 1e6)
+    np.testing.assert_allclose(lhs, rhs, rtol=0, atol=AFFINE_TOL * (1 + abs(scale)) * FINITE_MAX)
     batch = engines.convert(np.stack([x, y]).reshape(2, 1, 9, 3), engine)
     assert batch.shape == (2, 1) + b.shape
-    np.testing.assert_allclose(batch[1, 0], engines.convert(y, engine), rtol=0, atol=1e-14 * 1e6)
+    np.testing.assert_allclose(batch[1, 0], engines.convert(y, engine), rtol=0, atol=SUM_ORDER_TOL * FINITE_MAX)
 
 
 # --------------------------------------------------------------------------- #

@@ -49,6 +49,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from conftest import dc_relative_error, engine_cases, is_padded_identity
 
 from skysh import SkySH, cli, preetham, sh, shmin
 from skysh.export import (
@@ -101,14 +102,18 @@ same rounding as azimuth 0 (the unreduced export was 1.3e-13 off at -12345.678).
 CONTROL_MARGIN: float = 1e3
 """A negative control must miss by this factor times the tolerance."""
 
+PLAIN_DIP: float = -1e-3
+"""The unconstrained projection's minimum over the sphere (of the mean) must fall below this for the
+non-negativity check to be able to fail: the size of the table's own margin (1e-3 of the mean), with sign flipped."""
+
+ENGINE_SNAP_TOL: float = 1e-13
+"""export_js's engine plan against the engine's map, over the largest entry: the fold snaps entries to 1 within
+export_js.ENGINE_UNIT (1e-14) and to 0 within ENGINE_ZERO (1e-13) of the largest, and otherwise only divides and
+multiplies by the band factor (a few ulps): ENGINE_ZERO bounds both."""
+
 CC: str | None = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
 CXX: str | None = shutil.which("c++") or shutil.which("g++") or shutil.which("clang++")
 GLSLANG: str | None = shutil.which("glslangValidator")
-
-
-@pytest.fixture(scope="module")
-def sky() -> SkySH:
-    return SkySH.load()
 
 
 def points() -> list[tuple[float, float, float, int, int]]:
@@ -121,11 +126,6 @@ def points() -> list[tuple[float, float, float, int, int]]:
         for gibbs in (0, 1)
         for irradiance in (0, 1)
     ]
-
-
-def dc_relative_error(got: np.ndarray, ref: np.ndarray) -> float:
-    """max over channels of max_i |got - ref| / |ref DC| (see the module docstring)."""
-    return float((np.abs(got - ref).max(axis=-2) / np.abs(ref[..., 0, :])).max())
 
 
 TABLE_CHOICES: dict[int, bool | None] = {BY_INTENT: None, 0: False, 1: True}
@@ -422,7 +422,7 @@ class TestCIrradianceTable:
         assert np.all(codes == 0)
         assert relative_minimum(table).min() >= 0.0
         _, plain = run_c(builds[name], [f + (0, 1, 0, 0) for f in frames])
-        assert relative_minimum(plain).min() < -1e-3  # measured -2.6e-2 of the mean
+        assert relative_minimum(plain).min() < PLAIN_DIP  # measured -2.6e-2 of the mean
 
     def test_negative_control_wrong_rotation_sign(self, sky: SkySH, tmp_path: Path) -> None:
         """A header whose rotation (Habel eq. 4) turns the other way must fail the comparison with the runtime."""
@@ -481,23 +481,6 @@ int main(void) {
 """
 
 
-def engine_cases() -> list[tuple[str, int]]:
-    """(engine, bands) for every band count each engine takes; none while skysh.engines does not exist."""
-    try:
-        from skysh import engines
-    except ModuleNotFoundError:
-        return []
-    cases = []
-    for name in engines.ENGINES:
-        for n in range(1, engines.ENGINE_MAX_BANDS[name] + 1):
-            try:
-                engines.engine_map(name, n)
-            except ValueError:
-                continue
-            cases.append((name, n))
-    return cases
-
-
 def engine_table(p: tuple, bands: int) -> bool:
     """The runtime's irradiance_table for an engine at (ts, t, phi, gibbs[, dering[, table]]): engines light diffusely,
     so by intent the table at 3 bands without the Gibbs filter and with deringing (docs/engines.md)."""
@@ -517,18 +500,6 @@ def engine_reference(sky: SkySH, pts: list, name: str, bands: int) -> tuple[np.n
     ref = np.asarray(engines.convert(radiance, name), dtype=np.float64).reshape(len(pts), -1)
     gain = float(np.abs(np.asarray(engines.engine_map(name, bands).matrix)).sum(axis=1).max())
     return ref, gain * float(np.abs(radiance[:, 0]).max())
-
-
-def is_padded_identity(name: str, bands: int) -> bool:
-    """True when the engine's map is skysh's numbers as they are (zero-padded): no control can fail."""
-    from skysh import engines
-
-    emap = engines.engine_map(name, bands)
-    matrix = np.asarray(emap.matrix)
-    probe = np.random.default_rng(1).standard_normal(matrix.shape[1])
-    padded = np.zeros(matrix.shape[0])
-    padded[: min(probe.size, padded.size)] = probe[: padded.size]
-    return bool(np.allclose(matrix @ probe + np.asarray(emap.offset), padded, rtol=0.0, atol=1e-14))
 
 
 def engine_points() -> list[tuple[float, float, float, int]]:
@@ -614,7 +585,7 @@ class TestEngineOtherLanguages:
         plan, emap = engine_plan(name, bands), engines.engine_map(name, bands)
         band_of_column = np.repeat([sh.lm(i)[0] for i in range(bands * bands)], 3)
         rebuilt = plan.matrix * plan.band_factor[band_of_column]
-        assert np.abs(rebuilt - emap.matrix).max() <= 1e-13 * np.abs(emap.matrix).max()
+        assert np.abs(rebuilt - emap.matrix).max() <= ENGINE_SNAP_TOL * np.abs(emap.matrix).max()
         np.testing.assert_array_equal(plan.offset, emap.offset)
         assert plan.shape == tuple(emap.shape) and plan.offset.size == np.prod(plan.shape)
 

@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from conftest import dc_relative_error, engine_cases, is_padded_identity
 
 from skysh import SkySH, sh, shmin
 from skysh.export import export_source
@@ -51,6 +52,10 @@ up to the Chebyshev recurrence against cos(k acos x) and the order of summation
 CONTROL_MARGIN: float = 1e3
 """A negative control must miss by this factor times the tolerance: a wrong answer
 is wrong by far more than rounding."""
+
+PLAIN_DIP: float = -1e-3
+"""The module's irradiance without the table and deringing must dip below this (of the mean) for the
+non-negativity check to be able to fail: the size of the table's own margin (1e-3 of the mean), with sign flipped."""
 
 RANDOM_INPUTS: int = 560
 """Random (sun, turbidity, azimuth, options) calls compared with the runtime (>= 500):
@@ -84,11 +89,6 @@ process.stdout.write(JSON.stringify({ results, exports: Object.keys(m).sort(), e
 
 
 @pytest.fixture(scope="module")
-def sky() -> SkySH:
-    return SkySH.load()
-
-
-@pytest.fixture(scope="module")
 def module_dir(sky: SkySH, tmp_path_factory: pytest.TempPathFactory) -> Path:
     directory = tmp_path_factory.mktemp("js")
     (directory / "sky_sh.mjs").write_text(module_source(sky))
@@ -113,11 +113,6 @@ def run_node(directory: Path, calls: list[list[Any]], module: str = "sky_sh.mjs"
     done = subprocess.run([NODE, str(directory / "runner.mjs")], input=request, capture_output=True, text=True, check=False)
     assert done.returncode == 0, done.stderr
     return json.loads(done.stdout)
-
-
-def dc_relative_error(got: np.ndarray, ref: np.ndarray) -> float:
-    """max over channels of max_i |got - ref| / |ref DC|, for (N*N, 3) arrays."""
-    return float((np.abs(got - ref).max(axis=-2) / np.abs(ref[..., 0, :])).max())
 
 
 def random_calls(count: int, seed: int = SEED) -> list[tuple[float, float, float, dict[str, Any]]]:
@@ -366,7 +361,7 @@ class TestIrradianceTable:
         values = np.array([r["values"] for r in reply["results"]]).reshape(2, len(frames), 9, 3)
         mean = values[:, :, 0, :] / (2.0 * math.sqrt(math.pi))
         lowest = (shmin.exact_min(values) / mean).min(axis=(1, 2))
-        assert lowest[0] >= 0.0 and lowest[1] < -1e-3  # measured 6.8e-4 and -2.6e-2 of the mean
+        assert lowest[0] >= 0.0 and lowest[1] < PLAIN_DIP  # measured 6.8e-4 and -2.6e-2 of the mean
 
     def test_negative_control_wrong_rotation_sign(self, sky: SkySH, module_dir: Path) -> None:
         """A module whose rotation (Habel eq. 4) turns the other way must fail the comparison with the runtime."""
@@ -461,23 +456,6 @@ class TestRefusals:
 
 
 # --------------------------------------------------------------------------- #
-def engine_cases() -> list[tuple[str, int]]:
-    """(engine, bands) for every band count each engine takes (engine_map accepts)."""
-    try:
-        from skysh import engines
-    except ModuleNotFoundError:
-        return []
-    cases = []
-    for name in engines.ENGINES:
-        for n in range(1, engines.ENGINE_MAX_BANDS[name] + 1):
-            try:
-                engines.engine_map(name, n)
-            except ValueError:
-                continue
-            cases.append((name, n))
-    return cases
-
-
 ENGINE_INPUTS: int = 12
 """Random inputs per (engine, bands, gibbs) case."""
 
@@ -508,18 +486,6 @@ def engine_error(sky: SkySH, module_dir: Path, name: str, bands: int) -> tuple[f
         unconverted[: plain_values.size] = plain_values
         control = max(control, float(np.abs(unconverted - ref).max()) / scale)
     return worst, control
-
-
-def is_padded_identity(name: str, bands: int) -> bool:
-    """True when the engine's map is skysh's numbers as they are (zero-padded): no control can fail."""
-    from skysh import engines
-
-    emap = engines.engine_map(name, bands)
-    matrix = np.asarray(emap.matrix)
-    probe = np.random.default_rng(1).standard_normal(matrix.shape[1])
-    padded = np.zeros(matrix.shape[0])
-    padded[: min(probe.size, padded.size)] = probe[: padded.size]
-    return bool(np.allclose(matrix @ probe + np.asarray(emap.offset), padded, rtol=0.0, atol=1e-14))
 
 
 class TestEngines:

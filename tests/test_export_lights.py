@@ -34,6 +34,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from conftest import dc_relative_error
 
 from skysh import SkySH, preetham, sh, shmin
 from skysh.export import export_source, export_tables
@@ -59,6 +60,15 @@ CONTROL_MARGIN: float = 1e3
 NONNEGATIVE_FLOOR: float = -1e-9
 """Sun + dering: the irradiance over the sphere must stay above this times the irradiance DC (rounding of
 a sum that touches 0 where the window is tight)."""
+
+PLAIN_DIP: float = -1e-3
+"""Sun without deringing: the irradiance's minimum over the sphere (of the DC) must fall below this for the
+non-negativity check to be able to fail: the size of the table's own margin (1e-3 of the mean), with sign flipped."""
+
+WINDOWED_TRIG_TOL: float = 1e-14
+"""The exported trig matrix against sh.basis times the window, absolute: values below 1 (the largest is about
+0.6) formed as an 8-term sum of cos(k ts), sin(k ts) times matrix entries whose absolute row sums are below 1,
+so a few roundings of unit-size terms (eps 2.2e-16 each)."""
 
 RANDOM_POINTS: int = 240
 """Random frames per build (each with its own flags and albedo)."""
@@ -120,11 +130,6 @@ def compile_header(source: str, directory: Path, name: str) -> Path:
 
 
 @pytest.fixture(scope="module")
-def sky() -> SkySH:
-    return SkySH.load()
-
-
-@pytest.fixture(scope="module")
 def binaries(sky: SkySH, tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     if CC is None:
         pytest.skip("no C compiler on this machine")
@@ -160,10 +165,6 @@ def random_points(bands: int, count: int = RANDOM_POINTS, seed: int = 7) -> list
 def reference(sky: SkySH, p: Point, bands: int) -> np.ndarray:
     return sky.coefficients(p[0], p[1], p[2], bands=bands, gibbs=bool(p[3]), dering=bool(p[4]), irradiance=bool(p[5]),
                             sun=bool(p[6]), ground_albedo=p[8], irradiance_table=TABLE_CHOICES[table_of(p)])
-
-
-def dc_relative_error(got: np.ndarray, ref: np.ndarray) -> float:
-    return float((np.abs(got - ref).max(axis=-2) / np.abs(ref[..., 0, :])).max())
 
 
 def errors(sky: SkySH, binary: Path, bands: int, pts: list[Point]) -> tuple[float, float, float]:
@@ -205,7 +206,7 @@ class TestC:
             rows = np.array([row[8:].reshape(-1, 3) for row in run(binaries["3"], pts)])
             lowest[dering, table, albedo] = float((shmin.exact_min(rows) / rows[:, 0, :]).min())
         assert min(value for key, value in lowest.items() if key[0]) >= NONNEGATIVE_FLOOR
-        assert lowest[0, 0, (0.0,) * 3] < -1e-3  # measured -7.3e-3 of the DC without deringing
+        assert lowest[0, 0, (0.0,) * 3] < PLAIN_DIP  # measured -7.3e-3 of the DC without deringing
 
     def test_refusals(self, binaries: dict[str, Path]) -> None:
         bad: list[Point] = [
@@ -365,7 +366,7 @@ class TestGenerator:
         y = sh.basis(np.stack([np.sin(ts), 0.0 * ts, np.cos(ts)], axis=-1), 4)
         half = [l * (l + 1) + m for l in range(4) for m in range(l + 1)]
         expected = y[:, half] * sun_window(4)[[l for l in range(4) for _ in range(l + 1)]]
-        np.testing.assert_allclose(trig @ lights.windowed_trig().T, expected, rtol=0, atol=1e-14)
+        np.testing.assert_allclose(trig @ lights.windowed_trig().T, expected, rtol=0, atol=WINDOWED_TRIG_TOL)
         np.testing.assert_array_equal(lights.c10, export_tables(sky, 4).table[:, :, 1, :])  # stored row (1, 0)
 
     @pytest.mark.parametrize(("kwargs", "name"), [

@@ -22,14 +22,13 @@ from collections.abc import Callable
 
 import numpy as np
 import pytest
+from conftest import EPS
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import optimize
 
 from skysh import irradiance_fit as irf
 from skysh import sh
-
-EPS: float = float(np.finfo(np.float64).eps)
 
 FORM_RTOL: float = 1e-13
 """c + g.w + w^T A w against sh.basis: two sums of 9 products of O(1) terms."""
@@ -60,6 +59,27 @@ NEGATIVE_RTOL: float = 1e-12
 CHROMA_TOL: float = 1e-6
 """u'v' distance above the bound at the constrained normals: the solver's 1e-8 feasibility
 on the scaled cone, divided by D ~ 0.05 x mean at the dimmest constrained normal."""
+
+CERTIFICATE_GAP: float = 1e-4
+"""Offset of the trial minimum from the dense minimum, in units of max|e|, at which the lifted matrix's best
+eigenvalue must change sign: well above the bounded scalar search's accuracy (xatol 1e-13, so ~1e-10 in the
+eigenvalue) and the dense minimum's MIN_RTOL."""
+
+FEASIBLE_FLOOR: float = -1e-13
+"""The cutting-plane reference stops once its iterate's refined minimum (in units of the channel's mean) is above
+this: rounding of 9-term sums of O(1) values, far below SOLVER_ATOL."""
+
+BINDING_MARGIN: float = 1e-4
+"""The minimax objective with the non-negativity constraint exceeds the unconstrained one by more than this
+(units of the mean) when the constraint binds: 100 x SOLVER_ATOL, so solver tolerance cannot fake it."""
+
+BLEND_L2_TOL: float = 1e-4
+"""A blend with weight 1e6 against the L2 optimum, per coefficient in units of the channel's mean: the worst-error
+term moves the L2 optimum by about its gradient / weight ~ 1e-6; 100x that for the solvers' own tolerances."""
+
+POLY_FIT_RTOL: float = 1e-10
+"""A least-squares table fitted to exact polynomial data of its own degrees, at held-out points: rounding of a
+20-term fit with condition number ~10 (a few hundred eps), with room for the luminance scale's evaluation."""
 
 SMALL = irf.OPTIMISATION_NORMALS // 16
 """Normal count for fast solver tests (about 130 normals)."""
@@ -204,7 +224,7 @@ class TestCertificate:
     def test_certificate_exists_exactly_below_the_minimum(self, seed: int) -> None:
         e = np.random.default_rng(10 + seed).normal(size=9)
         minimum = dense_minimum(e)
-        gap = 1e-4 * np.abs(e).max()  # well above the bounded search's accuracy (~1e-10)
+        gap = CERTIFICATE_GAP * np.abs(e).max()
         assert self.best_eigenvalue(e, minimum - gap) > 0.0
         assert self.best_eigenvalue(e, minimum + gap) < 0.0
 
@@ -259,7 +279,7 @@ def cutting_plane(solve: Callable[[np.ndarray], tuple[float, np.ndarray]], round
     for _ in range(rounds):
         value, x = solve(rows)
         lowest, row = refined_argmin(x)
-        if lowest >= -1e-13:  # feasible on the whole sphere: the relaxation is exact
+        if lowest >= FEASIBLE_FLOOR:  # feasible on the whole sphere: the relaxation is exact
             break
         rows = np.vstack([rows, row])
     return value
@@ -293,7 +313,7 @@ class TestConstrainedL2:
         if np.any(irf.sphere_minimum(truth[:9]) < 0.0):
             pytest.skip("this sky's projection is negative: not the case under test")
         coeffs, _ = irf.constrained_coefficients(truth, irf.Objective("l2"))
-        assert np.allclose(coeffs, truth[:9], rtol=0, atol=1e-6 * irf.Y00 * truth[0].max())
+        assert np.allclose(coeffs, truth[:9], rtol=0, atol=SOLVER_ATOL * irf.Y00 * truth[0].max())
 
     def test_negative_projection_is_moved(self) -> None:  # negative control of the constraint
         truth = sky_truth(89.0, 2.5)
@@ -354,7 +374,7 @@ class TestWorstCase:
             total += cutting_plane(solve)
         free = irf.constrained_coefficients(truth, irf.Objective("minimax_free", normals=SMALL))[1]["objective"]
         assert abs(info["objective"] - total) <= SOLVER_ATOL
-        assert info["objective"] > free + 1e-4  # the constraint binds on this sky (negative control)
+        assert info["objective"] > free + BINDING_MARGIN  # the constraint binds on this sky (negative control)
         assert np.all(info["minimum"] >= -NEGATIVE_RTOL)
 
     def test_blend_spans_minimax_and_l2(self) -> None:
@@ -364,8 +384,7 @@ class TestWorstCase:
         l2 = irf.constrained_coefficients(truth, irf.Objective("l2"))[0]
         heavy = irf.constrained_coefficients(truth, irf.Objective("blend", weight=1e6, normals=SMALL))[0]
         assert abs(at_zero - minimax) <= SOLVER_ATOL
-        # weight 1e6 leaves the L2 optimum's distance off by ~ (worst-error gradient) / weight ~ 1e-6
-        assert np.max(np.abs(heavy - l2) / (irf.Y00 * truth[0])) <= 1e-4
+        assert np.max(np.abs(heavy - l2) / (irf.Y00 * truth[0])) <= BLEND_L2_TOL
 
     def test_chroma_bound_holds_at_lit_normals(self) -> None:
         import colour
@@ -419,8 +438,7 @@ class TestGridAndTable:
         table, degrees, _ = irf.fit_irradiance_table(ts, tu, data(ts, tu), (2, 1))
         hts, htu = fit.held_out_points(20, 5)
         back = irf.evaluate_irradiance_table(table, degrees, hts, htu)
-        # least squares on exact polynomial data: rounding of a 20-term fit, condition ~10
-        assert np.allclose(back, data(hts, htu), rtol=1e-10, atol=0)
+        assert np.allclose(back, data(hts, htu), rtol=POLY_FIT_RTOL, atol=0)
         assert not back[:, [1, 4, 5]].any()
 
 

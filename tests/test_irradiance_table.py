@@ -61,15 +61,15 @@ FIT_RTOL: float = 5e-3
 """The table against fresh exact optima, max over the sphere / mean: the study measured a worst of
 0.24 % on 164 held-out points (report.md, section 3); 0.5 % leaves room for other points."""
 
+EXACT_FIT_TOL: float = 1e-12
+"""build_table's recorded worst fit error (max over the sphere / mean) on data of the table's own form (the
+luminance scale times an affine function of x): a least-squares fit that reproduces its data up to rounding
+of the Chebyshev sums and the exact minimum search, a few hundred eps."""
+
 POINTS: int = 10_000
 EDGE: int = 500
 SEED: int = 1818
 """Held-out points of these tests: their own seed (the file's certificate used 2025, its fit 2018)."""
-
-
-@pytest.fixture(scope="module")
-def sky() -> SkySH:
-    return SkySH.load()
 
 
 @pytest.fixture(scope="module")
@@ -313,7 +313,7 @@ class TestBuildTable:
         table, degrees, block = irf.build_table((6, 4), (2, 1), mapper=_synthetic(3.0), held_out=(4, 1))
         assert table.shape == (6, 6, 3) and degrees.tolist() == [[2, 1]] * 3
         assert {"objective", "margin", "fit_error", "nonnegativity"} <= set(block)
-        assert block["fit_error"]["worst"] < 1e-12 and block["fit_error"]["points"] == 4 + 4 + 4
+        assert block["fit_error"]["worst"] < EXACT_FIT_TOL and block["fit_error"]["points"] == 4 + 4 + 4
         assert block["nonnegativity"]["negative"] == 0 and block["nonnegativity"]["points"] == 12_004
         again = irf.build_table((6, 4), (2, 1), mapper=_synthetic(3.0), held_out=(4, 1))
         np.testing.assert_array_equal(again[0], table)

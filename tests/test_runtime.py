@@ -30,17 +30,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import EPS, ROOT, chebyshev_variables
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.polynomial import chebyshev as npcheb
 
 from skysh import coefficient_file, fit, preetham, sh
 from skysh.runtime import SkySH, gibbs_factors
-
-ROOT = Path(__file__).resolve().parent.parent
-
-EPS: float = float(np.finfo(np.float64).eps)
-"""Machine epsilon of float64, 2.2e-16."""
 
 PATH_RTOL: float = 1e-12
 """Scalar fast path vs array path, batch vs loop (relative to the largest
@@ -94,6 +90,15 @@ RATIO_ATOL: float = 1e-13
 ratio of the two sinc factors: two divisions of values that carry GIBBS_RTOL
 rounding each (~1e-14), on a ratio of about 0.5."""
 
+TRIG_ATOL: float = 16 * EPS
+"""cos(m phi), sin(m phi) built by angle addition (the batch path) against numpy's cos and sin of m phi: each of
+the <= 5 recurrence steps adds about one rounding of a unit-size value, so 16 EPS bounds the drift."""
+
+PUBLISHED_INCONSISTENCY: tuple[float, float] = (1e-6, 1e-3)
+"""Bracket of |I - C A| (infinity norm) for the published sRGB RGB->XYZ matrix C and colour-science's XYZ->RGB A:
+C has 4 decimals, so the product is I plus the rounding of 3 entries per row (at most 5e-5 each, entries <= 1):
+below 1e-3; above 1e-6, so the bound it yields is not the trivial rounding of exact inverses."""
+
 FULL_TURN_RTOL: float = 1e-12
 """phi = 0.5 and phi + 2 pi = 6.78: the sum is rounded (half an ulp, 4.4e-16),
 which m <= 6 in cos(m phi), sin(m phi) turns into ~3e-15 on each rotation
@@ -103,11 +108,6 @@ HALF_PI: float = math.pi / 2.0
 Z_EDGES: tuple[float, ...] = (0.0, HALF_PI)
 T_EDGES: tuple[float, ...] = (2.5, 6.0)
 CORNERS: list[tuple[float, float]] = [(a, b) for a in Z_EDGES for b in T_EDGES]
-
-
-@pytest.fixture(scope="module")
-def sky() -> SkySH:
-    return SkySH.load()
 
 
 def _lm_list(bands: int) -> list[tuple[int, int]]:
@@ -132,13 +132,6 @@ SYNTH_DEGREES: np.ndarray = np.array([[2, 1], [4, 3], [3, 2]], dtype=np.int64)
 runtime's per-band-count term selection is exercised."""
 
 
-def _scaled(ts: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The Chebyshev variables, typed from the file's metadata 'basis' text."""
-    x = 4.0 * np.asarray(ts, dtype=float) / math.pi - 1.0
-    y = (2.0 * np.log(t) - math.log(2.5) - math.log(6.0)) / (math.log(6.0) - math.log(2.5))
-    return x, y
-
-
 def _synthetic() -> tuple[coefficient_file.SkyTable, dict[tuple[int, int], np.ndarray]]:
     """A SkyTable with random Chebyshev coefficients per (l, m >= 0) row and channel, and the same as 2D arrays."""
     rng = np.random.default_rng(20080404)
@@ -159,7 +152,7 @@ def _synthetic() -> tuple[coefficient_file.SkyTable, dict[tuple[int, int], np.nd
 
 def _synthetic_expected(polys: dict, ts: float, t: float, phi: float, bands: int, gibbs: bool) -> tuple[np.ndarray, float]:
     """Expected (N*N, 3) coefficients and the rounding scale, computed without the runtime."""
-    x, y = _scaled(ts, t)
+    x, y = chebyshev_variables(ts, t)
     scale = float(preetham.luminance_scale(ts, t))
     factors = [1.0] + [math.sin(math.pi * l / bands) / (math.pi * l / bands) for l in range(1, bands)]
     out = np.zeros((bands * bands, 3))
@@ -378,9 +371,7 @@ class TestRotationAndTruth:
 
     @pytest.mark.parametrize("bands", [1, 2, 3, 7])
     def test_batch_rotation_factors_against_direct_trig(self, bands: int) -> None:
-        # The batch path builds cos(m phi), sin(m phi) by angle addition; reference:
-        # numpy's cos and sin of m phi directly. Each of the <= 5 recurrence steps adds
-        # about one rounding of a unit-size value, so 16 EPS bounds the drift.
+        # The batch path builds cos(m phi), sin(m phi) by angle addition; reference: numpy's directly (TRIG_ATOL).
         from skysh.runtime import _rotation_factors
 
         phi = np.linspace(-50.0, 50.0, 2001)
@@ -388,7 +379,7 @@ class TestRotationAndTruth:
         expected = np.concatenate([np.cos(angle), np.sin(angle)], axis=1)
         got = _rotation_factors(phi, bands)
         assert got.shape == (phi.size, 2 * bands)
-        np.testing.assert_allclose(got, expected, rtol=0.0, atol=16 * EPS)
+        np.testing.assert_allclose(got, expected, rtol=0.0, atol=TRIG_ATOL)
 
     def test_full_turn(self, sky: SkySH) -> None:
         _close(sky.coefficients(1.0, 3.0, 2 * math.pi + 0.5, bands=7), sky.coefficients(1.0, 3.0, 0.5, bands=7), FULL_TURN_RTOL)
@@ -615,7 +606,7 @@ class TestColourspace:
         # the difference is at most cond(B) x |I - C A| x |wide|, computed here.
         a, b, c = matrices["srgb_from_xyz"], matrices["wide_from_xyz"], matrices["srgb_to_xyz_published"]
         inconsistency = np.linalg.norm(np.eye(3) - c @ a, np.inf)
-        assert 1e-6 < inconsistency < 1e-3  # the published matrices: I + 3.5e-5 (3 entries per row)
+        assert PUBLISHED_INCONSISTENCY[0] < inconsistency < PUBLISHED_INCONSISTENCY[1]  # the published matrices
         bound = np.linalg.cond(b, np.inf) * inconsistency
         for ts, t, phi in [(0.5, 3.0, 1.0), (1.5, 2.6, 0.3), (0.0, 6.0, 0.0)]:
             srgb = sky.coefficients(ts, t, phi, bands=7)
