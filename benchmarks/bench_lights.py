@@ -27,8 +27,9 @@ rounds find the quiet moments of a shared machine that a few long runs miss.
     ``evaluate`` (:meth:`skysh.lights.LitPlan._evaluate`: the larger cosine and
     products that also give the sun's ln XYZ, the sky's c_10 and the sun's
     Ybar, read back as Python floats, exp and the 3 x 3 colour matrix in Python)
-    and ``fused`` (the whole scalar core: also the (K_half, 2) x (2, 3) product
-    that adds sun and ground, the gather and the rotation); the rest of case 2
+    and ``fused`` (the whole scalar core: also one gather of sky, sun and ground
+    terms, their rotation, and one (N^2, 5) x (5, 3) product that adds sun and
+    ground and applies the luminance scale); the rest of case 2
     is the checks and dispatch in ``coefficients``.
 
 Why the 30 % is out of reach in numpy: the sky's scalar call is about a dozen

@@ -211,9 +211,6 @@ WINDOW_TABLE: NDArray[np.float64] = window_table(3, "irradiance")
 times :data:`LINEAR_ATTENUATION`."""
 
 
-_ONES3: NDArray[np.float64] = np.ones(3)
-
-
 def _first(values: NDArray, floor: float) -> NDArray:
     """The least row r with values[:, :, r] >= floor in every channel, per function; R if none."""
     ok = np.minimum.reduce(values, 1) >= floor
@@ -230,7 +227,7 @@ def _least_row3(t: NDArray, rows: _Rows) -> NDArray:
     lam, v = np.linalg.eigh((t @ rows.form_q).reshape(t.shape[:-1] + (3, 3)))
     gam = (cg[..., None, 1:] @ v)[..., 0, :]
     a, d, c0 = 0.25 * gam * gam, lam - lam[..., :1], cg[..., 0]
-    x = np.maximum(np.sqrt(a @ _ONES3), shmin.FLOOR)
+    x = np.maximum(np.sqrt(a @ shmin.ONES), shmin.FLOOR)
     ok = np.minimum.reduce(shmin.dual(c0, lam, d, a, x), 1) >= shmin.ALLOWANCE
     if ok.all():
         return np.zeros(len(t), dtype=np.intp)
@@ -240,10 +237,10 @@ def _least_row3(t: NDArray, rows: _Rows) -> NDArray:
     c0 = c0[todo, :, None]
     x = shmin.newton(d, a, shmin.prefix_bound(d, a), 1)
     w = 1.0 / (d + x[..., None])
-    first = _first(c0 + lam[..., 0] - x - (a * w) @ _ONES3, shmin.ALLOWANCE)
+    first = _first(c0 + lam[..., 0] - x - (a * w) @ shmin.ONES, shmin.ALLOWANCE)
     y = gam * w  # -2 times the dual's point: the value at y / |y|
-    n2 = (y * y) @ _ONES3 + shmin.TINY
-    refuted = np.minimum.reduce(c0 - (gam * y) @ _ONES3 / np.sqrt(n2) + (lam * y * y) @ _ONES3 / n2, 1) < 0.0
+    n2 = (y * y) @ shmin.ONES + shmin.TINY
+    refuted = np.minimum.reduce(c0 - (gam * y) @ shmin.ONES / np.sqrt(n2) + (lam * y * y) @ shmin.ONES / n2, 1) < 0.0
     lead = np.where(refuted.all(-1), refuted.shape[-1], np.argmin(refuted, -1))  # rows refuted before the first not
     left = np.flatnonzero(lead < first)
     if left.size:

@@ -12,7 +12,7 @@ the sky's parameters, this module the static tables and the per-frame sums.
 -   :func:`ground_zonal`: the ground's zonal SH per unit radiance, Gibbs-filtered or not.
 -   :class:`LitPlan`: everything static of one (bands, gibbs) setting with the
     sun and the ground; its :meth:`LitPlan.fused` evaluates sky + sun + ground
-    of one frame with one vectorised cosine and three small products.
+    of one frame with one vectorised cosine, two small products, one gather and a (N^2, 5) x (5, 3) product.
 
 Order of the parts (``SkySH.coefficients``)
 -------------------------------------------
@@ -198,6 +198,37 @@ def ground_zonal(bands: int, gibbs: bool) -> NDArray[np.float64]:
     return out
 
 
+def _trig_q(bands: int, window: ArrayLike, zonal: NDArray[np.float64], lobe: bool) -> NDArray[np.float64]:
+    """(K_half, 2, 2 N): Q per frame = q @ trig(ts): the sun's windowed Ybar; the ground's constant via
+    cos(0 ts) = 1; times the clamped-cosine factors A_l when ``lobe`` (irradiance out)."""
+    layout = coefficient_file.zonal_half_layout(bands)
+    q = np.zeros((len(layout), 2, 2 * bands))
+    q[:, 0, :] = sun_trig_matrix(bands, window)
+    q[:, 1, 0] = [zonal[l * (l + 1)] if m == 0 else 0.0 for l, m in layout]
+    if lobe:  # the sun and the ground convolved as the sky (its plan built with ``lobe``)
+        q *= sh.cosine_lobe(bands)[[l for l, _ in layout]][:, None, None]
+    return q
+
+
+def _angle_map(sky_degrees: tuple[int, int], sun_degrees: tuple[int, int], bands: int,
+               depth: int) -> NDArray[np.float64]:
+    """:class:`LitPlan`'s angle map: rows (column, multiplier, phase) over the columns (acos x, acos y, phi,
+    1, ts, acos x_s, acos y_s); see the class docstring for the order of its blocks."""
+    (dx, dy), (sdx, sdy) = sky_degrees, sun_degrees
+    zero = (3, 0, 0.5 * math.pi)  # cos(pi / 2) = 6e-17: the weight matrix's zeros
+    rows = [(0, k, 0.0) for k in range(dx + 1)] + [(5, k, 0.0) for k in range(sdx + 1)]
+    rows += [(4, k, 0.0) for k in range(bands)] + [(4, k, -0.5 * math.pi) for k in range(bands)]
+    rows += [(1, j if j <= dy else 0, 0.0) for j in range(depth)] + [zero]  # padding rows meet zero columns
+    rows += [(6, j if j <= sdy else 0, 0.0) for j in range(depth)] + [zero]
+    rows += [zero] * depth + [(3, 0, 0.0)]
+    rows += [(2, m, 0.0) for m in range(bands)] + [(2, m, -0.5 * math.pi) for m in range(bands)]
+    angle_map = np.zeros((len(rows), 7))
+    for r, (column, multiplier, phase) in enumerate(rows):
+        angle_map[r, column] += multiplier
+        angle_map[r, 3] += phase
+    return angle_map
+
+
 class LitPlan:
     """
     Static tables of one (bands, gibbs) setting with the sun and the ground.
@@ -218,15 +249,22 @@ class LitPlan:
     6e-17, a perturbation at the rounding level): b[0] holds the sky's m >= 0
     coefficients over the luminance scale and its unfiltered c_10, b[1] the
     sun's ln XYZ, b[2] the (K_half, 2) matrix Q = [sun's windowed Ybar(ts),
-    ground's zonal factor]. Sun and ground enter as ``Q @ [[sun RGB], [L_g]]``
-    before the sky's gather and rotation (eq. 4), which serve all three.
+    ground's zonal factor]. One gather of b gives, per output coefficient, the
+    sky's three channels, the sun's Ybar and the ground's factor (m < 0 values
+    from their m > 0 partners), one multiplication rotates all five (eq. 4), and
+    one product with V = [lum I; sun RGB; ground RGB] (5, 3), built from Python
+    floats, adds sun and ground and applies the sky's luminance scale.
+
+    ``lobe``: irradiance out, the clamped-cosine factors A_l folded into the sky
+    plan's rows (built with ``lobe``) and into Q, for :meth:`fused` only.
     """
 
     __slots__ = ("bands", "k_half", "width", "depth", "nx", "y_slice", "angle_map", "table_x", "gather", "rotation",
                  "zonal_rows", "ground_rows", "window_l", "rgb_from_xyz", "rgb_rows", "sky", "readback", "gather5",
                  "rotation5")
 
-    def __init__(self, sky_plan: Any, sun_named: Any, rgb_from_xyz: ArrayLike | None, gibbs: bool) -> None:
+    def __init__(self, sky_plan: Any, sun_named: Any, rgb_from_xyz: ArrayLike | None, gibbs: bool,
+                 lobe: bool = False) -> None:
         from skysh.solar import (
             SUN_WINDOWS,  # physics constants, only when the sun or the ground is first used
         )
@@ -243,27 +281,14 @@ class LitPlan:
         # (K_half, 2) Q per frame = q @ trig: the sun's windowed Ybar; the ground's constant via cos(0 ts) = 1.
         window = SUN_WINDOWS[bands - 1]
         zonal = ground_zonal(bands, gibbs)
-        q = np.zeros((k_half, 2, 2 * bands))
-        q[:, 0, :] = sun_trig_matrix(bands, window)
-        q[:, 1, 0] = [zonal[l * (l + 1)] if m == 0 else 0.0 for l, m in coefficient_file.zonal_half_layout(bands)]
+        q = _trig_q(bands, window, zonal, lobe)
         # Block table: u-rows (sky x, sun x, trig) -> (D + 1) rows of C = W + 3 columns.
         table = np.zeros((nx, depth + 1, width + 3))
         table[: dx + 1, : dy + 1, :width] = np.asarray(sky_plan.half_table).reshape(dx + 1, dy + 1, width)
         table[dx + 1 : dx + sdx + 2, : sdy + 1, width:] = sun_table.reshape(sdx + 1, sdy + 1, 3)
         table[dx + sdx + 2 :, depth, : 2 * k_half] = q.reshape(2 * k_half, 2 * bands).T
         self.table_x = np.ascontiguousarray(table.reshape(nx, -1))
-        # Angle map rows (column, multiplier, phase); columns (acos x, acos y, phi, 1, ts, acos x_s, acos y_s).
-        zero = (3, 0, 0.5 * math.pi)  # cos(pi / 2) = 6e-17: the weight matrix's zeros
-        rows = [(0, k, 0.0) for k in range(dx + 1)] + [(5, k, 0.0) for k in range(sdx + 1)]
-        rows += [(4, k, 0.0) for k in range(bands)] + [(4, k, -0.5 * math.pi) for k in range(bands)]
-        rows += [(1, j if j <= dy else 0, 0.0) for j in range(depth)] + [zero]  # padding rows meet zero columns
-        rows += [(6, j if j <= sdy else 0, 0.0) for j in range(depth)] + [zero]
-        rows += [zero] * depth + [(3, 0, 0.0)]
-        rows += [(2, m, 0.0) for m in range(bands)] + [(2, m, -0.5 * math.pi) for m in range(bands)]
-        self.angle_map = np.zeros((len(rows), 7))
-        for r, (column, multiplier, phase) in enumerate(rows):
-            self.angle_map[r, column] += multiplier
-            self.angle_map[r, 3] += phase
+        self.angle_map = _angle_map((dx, dy), (sdx, sdy), bands, depth)
         self.y_slice = slice(nx, nx + 3 * (depth + 1))
         self.gather = sky_plan.gather
         self.rotation = (self.y_slice.stop + np.asarray(sky_plan.rot_index))[:, None].repeat(3, axis=1)
@@ -273,7 +298,7 @@ class LitPlan:
         self.rgb_from_xyz = np.eye(3) if rgb_from_xyz is None else np.array(rgb_from_xyz, dtype=np.float64)
         self.rgb_rows: tuple[tuple[float, ...], ...] = tuple(tuple(row) for row in self.rgb_from_xyz.tolist())
         # fused: b's flat indices of the sky's c_10 (row 0) and the sun's ln XYZ (row 1), read back together;
-        # X (N^2, 5) = b.ravel()[gather5] * packed[rotation5] holds, per output value, the sky's three channels,
+        # X (N^2, 5) = b[gather5] * packed[rotation5] holds, per output value, the sky's three channels,
         # the sun's Ybar and the ground's factor, each rotated (eq. 4); the result is X @ V with V (5, 3) =
         # [lum I; sun RGB; ground RGB] (Python floats), so sun, ground and the luminance scale are one product.
         c = width + 3
@@ -290,11 +315,12 @@ class LitPlan:
     # ------------------------------------------------------------------ #
     def _evaluate(self, ts: float, t: float, phi: float, x: float, y: float,
                   sun: bool) -> tuple[NDArray[np.float64], NDArray[np.float64], float, tuple, tuple]:
-        """Shared scalar step: packed factors, b (3, C), the luminance scale, the sun's RGB and E_h (lux).
+        """Shared scalar step: packed factors, b (3 C,), the luminance scale, the sun's RGB and E_h (lux).
 
-        b[0] holds the sky's m >= 0 coefficients and its unfiltered c_10 over the luminance scale, b[1]
+        b, read as (3, C): b[0] holds the sky's m >= 0 coefficients and its unfiltered c_10 over the luminance scale, b[1]
         the sun's ln XYZ, b[2] the (K_half, 2) matrix [sun's windowed Ybar(ts), ground's zonal factor]."""
-        m = 1.0 / (math.cos(ts) + _A * (_B - ts * _DEG) ** _NEG_C)  # Kasten's air mass (skysh.sunlight)
+        cos_ts = math.cos(ts)
+        m = 1.0 / (cos_ts + _A * (_B - ts * _DEG) ** _NEG_C)  # Kasten's air mass (skysh.sunlight)
         xs = (m - _M0) * _SX_SCALE - 1.0
         ys = (t - _TMIN) * _SY_SCALE - 1.0
         # Clamp what rounding (and Kasten's dip near the zenith) pushes past +-1 (x >= -1 holds exactly).
@@ -304,14 +330,14 @@ class LitPlan:
         packed = np.cos(np.dot(self.angle_map, np.array(angles)))
         depth = self.depth
         a = np.dot(packed[: self.nx], self.table_x)
-        b = np.dot(packed[self.y_slice].reshape(3, depth + 1), a.reshape(depth + 1, -1))
+        b = np.dot(packed[self.y_slice].reshape(3, depth + 1), a.reshape(depth + 1, -1)).ravel()
         lum = luminance_scale_unchecked(ts, t)
-        c0, c1, c2, lx, ly, lz = b.ravel()[self.readback].tolist()  # the sky's c_10 (over lum); the sun's ln XYZ
+        c0, c1, c2, lx, ly, lz = b[self.readback].tolist()  # the sky's c_10 (over lum); the sun's ln XYZ
         if sun:  # Python floats: cheaper than numpy for three values
             ex, ey, ez = math.exp(lx), math.exp(ly), math.exp(lz)
             (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = self.rgb_rows
             rgb = (r00 * ex + r01 * ey + r02 * ez, r10 * ex + r11 * ey + r12 * ez, r20 * ex + r21 * ey + r22 * ez)
-            cos_ts, hf = math.cos(ts), _HF * lum
+            hf = _HF * lum
             e_h = (hf * c0 + cos_ts * rgb[0], hf * c1 + cos_ts * rgb[1], hf * c2 + cos_ts * rgb[2])
         else:
             hf = _HF * lum
@@ -331,7 +357,7 @@ class LitPlan:
             gr, gg, gb = albedo[0] * e_h[0] * _INV_PI, albedo[1] * e_h[1] * _INV_PI, albedo[2] * e_h[2] * _INV_PI
         mix = np.array((lum, 0.0, 0.0, 0.0, lum, 0.0, 0.0, 0.0, lum, r if r > SUN_SH_CLAMP else SUN_SH_CLAMP,
                         g if g > SUN_SH_CLAMP else SUN_SH_CLAMP, bl if bl > SUN_SH_CLAMP else SUN_SH_CLAMP, gr, gg, gb))
-        parts = b.ravel()[self.gather5]  # (N^2, 5): sky RGB, sun's Ybar, ground's factor; m < 0 from m > 0
+        parts = b[self.gather5]  # (N^2, 5): sky RGB, sun's Ybar, ground's factor; m < 0 from m > 0
         parts *= packed[self.rotation5]  # eq. (4), the sky, the sun and the ground alike
         return np.dot(parts, mix.reshape(5, 3))
 
@@ -341,11 +367,12 @@ class LitPlan:
         or a colourspace conversion between them)."""
         packed, b, lum, rgb, e_h = self._evaluate(ts, t, phi, x, y, sun)
         rotation = packed[self.rotation]
-        sky = b[0, : self.width - 3][self.gather] * (rotation * lum)
+        sky = b[self.gather] * (rotation * lum)  # row 0 of b
         sun_sh = None
         if sun:
             delta = np.maximum(np.array(rgb), SUN_SH_CLAMP)
-            sun_sh = np.outer(b[2, : 2 * self.k_half : 2], delta).ravel()[self.gather] * rotation
+            start = 2 * (self.width + 3)  # row 2 of b: the sun's Ybar, the ground's factor, per m >= 0 row
+            sun_sh = np.outer(b[start : start + 2 * self.k_half : 2], delta).ravel()[self.gather] * rotation
         return sky, sun_sh, np.array(e_h)
 
     def sun_batch(self, ts: NDArray, phi: NDArray, rgb: NDArray) -> NDArray[np.float64]:

@@ -215,7 +215,7 @@ class SkySH:
         self._colour_matrices: dict[str, NDArray[np.float64]] = {}
         self._mixing: dict[str, bool] = {}  # colourspace -> its conversion matrix has a negative entry
         self._sun: SunLight | None = SunLight(sky_table) if "sun" in sky_table.tables else None
-        self._lit_plans: dict[tuple[int, bool, bool], lights.LitPlan] = {}  # built on first use of the sun or ground
+        self._lit_plans: dict[tuple[int, bool, bool, bool], lights.LitPlan] = {}  # on first use of the sun or ground
         irradiance = sky_table.tables.get("irradiance") if sky_table.bands >= 3 else None
         # The certified irradiance table (docs/irradiance.md): radiance-equivalent (False), irradiance (True).
         self._table_plans: dict[bool, _Plan] | None = None if irradiance is None else {
@@ -297,8 +297,7 @@ class SkySH:
         scalar = ts is not None and t is not None and phi is not None
         if sun or albedo is not None:
             frame = (ts, t, phi) if scalar else (sun_zenith, turbidity, sun_azimuth)
-            out = self._lit(frame, scalar, bands, gibbs, dering, colourspace, sun, albedo, table)
-            return out * self._plans[(math.isqrt(out.shape[-2]), True)].lobe if irradiance else out
+            return self._lit(frame, scalar, bands, gibbs, dering, colourspace, sun, albedo, table, irradiance)
         plan = self._table_plans[irradiance] if table else None  # type: ignore[index]
         if scalar:
             out = self._one(ts, t, phi, bands, gibbs, plan)  # type: ignore[arg-type]
@@ -436,22 +435,27 @@ class SkySH:
     # ------------------------------------------------------------------ #
     # The sun and the ground (skysh.lights)
     # ------------------------------------------------------------------ #
-    def _lit_plan(self, bands: Any, gibbs: bool, table: bool = False) -> lights.LitPlan:
-        plan = self._lit_plans.get((bands, gibbs, table)) if type(bands) is int else None
+    def _lit_plan(self, bands: Any, gibbs: bool, table: bool = False, lobe: bool = False) -> lights.LitPlan:
+        """The :class:`skysh.lights.LitPlan` of a setting, built on first use (``lobe``: irradiance out, its
+        clamped-cosine factors folded into the tables: only for :meth:`skysh.lights.LitPlan.fused`)."""
+        plan = self._lit_plans.get((bands, gibbs, table, lobe)) if type(bands) is int else None
         if plan is None:
             bands = check_bands(bands, high=self.bands)
-            plan = self._lit_plans.get((bands, gibbs, table))
+            plan = self._lit_plans.get((bands, gibbs, table, lobe))
             if plan is None:  # once per setting; a concurrent first call at worst builds it twice
                 sun = self.table.tables.get("sun")
                 matrix = None if self._sun is None else self._sun.rgb_from_xyz
                 rows_from = self.table.tables["irradiance"] if table else None
-                plan = lights.LitPlan(_Plan(self.table, bands, gibbs, c10=True, rows_from=rows_from), sun, matrix, gibbs)
-                self._lit_plans[(bands, gibbs, table)] = plan
+                sky_plan = _Plan(self.table, bands, gibbs, c10=True, rows_from=rows_from, lobe=lobe)
+                plan = lights.LitPlan(sky_plan, sun, matrix, gibbs, lobe)
+                self._lit_plans[(bands, gibbs, table, lobe)] = plan
         return plan
 
     def _lit(self, frame: tuple, scalar: bool, bands: Any, gibbs: bool, dering: bool, colourspace: str | None,
-             sun: bool, albedo: tuple[float, float, float] | None, table: bool = False) -> NDArray:
-        """Radiance SH of sky + sun + ground, in the output colourspace (the order of :mod:`skysh.lights`).
+             sun: bool, albedo: tuple[float, float, float] | None, table: bool = False,
+             irradiance: bool = False) -> NDArray:
+        """SH of sky + sun + ground, in the output colourspace (the order of :mod:`skysh.lights`); radiance,
+        or irradiance (the clamped-cosine convolution last) when ``irradiance``.
 
         ``frame``: (sun_zenith, turbidity, sun_azimuth), Python floats when ``scalar``. ``table``: the sky
         from the irradiance table (radiance-equivalent, never deringed), the sum deringed only after a
@@ -466,28 +470,37 @@ class SkySH:
         if scalar:
             ts, t, phi = frame
             phi = _check_frame(ts, t, phi)
-            plan = self._lit_plans.get((bands, gibbs, table)) if type(bands) is int else None
-            plan = self._lit_plan(bands, gibbs, table) if plan is None else plan
             x, y = ts * X_SCALE - X_SHIFT, math.log(t) * Y_SCALE - Y_SHIFT
-            if not dering_sky and not convert:  # the hot path: everything before one gather and rotation
+            if not dering_sky and not convert:  # the hot path: one fused evaluation, the lobe folded in
+                plan = self._lit_plans.get((bands, gibbs, table, irradiance)) if type(bands) is int else None
+                plan = self._lit_plan(bands, gibbs, table, irradiance) if plan is None else plan
                 return plan.fused(ts, t, phi, x, y, sun, albedo)
+            plan = self._lit_plan(bands, gibbs, table)
             sky, sun_sh, e_h = plan.parts(ts, t, phi, x, y, sun)
         else:
             ts_a, t_a, phi_a, shape = self._frames(*frame)
             plan = self._lit_plan(bands, gibbs, table)
             sky, sun_sh, e_h = self._lit_batch(ts_a, t_a, phi_a, shape, plan, sun)
+        return self._lit_finish(plan, sky, sun_sh, e_h, dering_sky, colourspace if convert else None, albedo,
+                                table and dering, irradiance)
+
+    def _lit_finish(self, plan: lights.LitPlan, sky: NDArray, sun_sh: NDArray | None, e_h: NDArray, dering_sky: bool,
+                    convert: str | None, albedo: tuple[float, float, float] | None, dering_table: bool,
+                    irradiance: bool) -> NDArray:
+        """The composed path of :meth:`_lit` after the evaluation: dering the sky, + sun, conversion to
+        ``convert`` (None: none), + ground, the table's deringing after a mixing conversion, the lobe."""
         if dering_sky:
             sky = _dering(sky)
         if sun_sh is not None:
             sky = sky + sun_sh
-        if convert:
-            matrix = self._colour_matrix(colourspace).T  # type: ignore[arg-type]
+        if convert is not None:
+            matrix = self._colour_matrix(convert).T
             sky, e_h = sky @ matrix, e_h @ matrix
         if albedo is not None:
             sky = plan.add_ground(sky, e_h, albedo)
-        if table and convert and dering and self._mixing[colourspace]:  # type: ignore[index]
+        if dering_table and convert is not None and self._mixing[convert]:
             sky = _dering(sky)
-        return sky
+        return sky * self._plans[(plan.bands, True)].lobe if irradiance else sky
 
     def _lit_batch(self, ts: NDArray, t: NDArray, phi: NDArray, shape: tuple[int, ...], plan: lights.LitPlan,
                    sun: bool) -> tuple[NDArray, NDArray | None, NDArray]:

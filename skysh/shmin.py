@@ -74,7 +74,7 @@ SAMPLE_ROUNDING: float = 2.0**-40
 """Allowance of a sampled value per unit of ``sum_l |f_l| sqrt((2l+1)/(4 pi)) >= max |f|``."""
 
 TINY, FLOOR, POLE = 1e-300, 1e-140, 1e-90
-_ONES: NDArray[np.float64] = np.ones(3)  # sums over the last axis (2 or 3) as one product
+ONES: NDArray[np.float64] = np.ones(3)  # sums over a last axis of 2 or 3 as one product (cheaper than a reduce)
 """Guards (normalised units): denominator offset, least x (x^2 normal), least gap (a / d^3 finite)."""
 
 DIRECTIONS: int = 4096
@@ -154,7 +154,7 @@ _REST: dict[int, NDArray] = {n: np.triu(np.ones((n - 1, n)), 1) for n in (2, 3)}
 
 def newton(d: NDArray, a: NDArray, x: NDArray, steps: int) -> NDArray:
     """Newton's steps on 1 / sqrt(S(x)) = 1 from a start left of the root, never below it."""
-    low, ones = x, _ONES[: d.shape[-1]]
+    low, ones = x, ONES[: d.shape[-1]]
     for _ in range(steps):
         w = 1.0 / (d + x[..., None])
         aw2 = a * w * w
