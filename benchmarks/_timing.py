@@ -12,22 +12,25 @@ The scripts run as ``python benchmarks/bench_x.py`` (this folder is then first o
 from __future__ import annotations
 
 import math
+import time
 import timeit
 from collections.abc import Callable
 
 __all__ = ["interleaved_best"]
 
 
-def interleaved_best(cases: dict[str, Callable[[], object]], repeats: int, run_seconds: float) -> dict[str, float]:
+def interleaved_best(cases: dict[str, Callable[[], object]], repeats: int, run_seconds: float,
+                     clock: Callable[[], float] = time.perf_counter) -> dict[str, float]:
     """
     Best seconds per call of every case over ``repeats`` rounds; within a round the
     cases take turns, so a change in the machine's load hits numerator and
     denominator alike. Each case's loop count is set once (after a warm-up) so
-    that one timed run lasts about ``run_seconds`` (at least one call).
+    that one timed run lasts about ``run_seconds`` (at least one call). ``clock``: wall time
+    by default, or e.g. ``time.process_time`` (the process's CPU time).
     """
     timers, numbers = {}, {}
     for name, fn in cases.items():
-        timer = timeit.Timer(fn)
+        timer = timeit.Timer(fn, timer=clock)
         number, elapsed = timer.autorange()  # also the warm-up
         timers[name] = timer
         numbers[name] = max(1, math.ceil(number * run_seconds / max(elapsed, 1e-9)))

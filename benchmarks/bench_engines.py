@@ -36,14 +36,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
 import platform
 import time
-import timeit
 from collections.abc import Callable
 
 import numpy as np
+from _timing import interleaved_best
 
 from skysh import engines
 from skysh.runtime import SkySH
@@ -54,22 +53,6 @@ TARGET_ADDED_S: float = 2e-6
 
 CLOCKS: dict[str, Callable[[], float]] = {"process": time.process_time, "wall": time.perf_counter}
 """--clock choices: the process's CPU time, or wall time."""
-
-
-def interleaved_best(cases: dict[str, Callable[[], object]], repeats: int, seconds: float,
-                     clock: Callable[[], float] = time.process_time) -> dict[str, float]:
-    """Best seconds per call of every case over ``repeats`` rounds in which the cases take turns."""
-    timers, numbers = {}, {}
-    for name, fn in cases.items():
-        timer = timeit.Timer(fn, timer=clock)
-        number, elapsed = timer.autorange()  # also the warm-up
-        timers[name] = timer
-        numbers[name] = max(1, math.ceil(number * seconds / max(elapsed, 1e-9)))
-    best = {name: math.inf for name in cases}
-    for _ in range(repeats):
-        for name, timer in timers.items():
-            best[name] = min(best[name], timer.timeit(numbers[name]) / numbers[name])
-    return best
 
 
 def main(argv: list[str] | None = None) -> int:
