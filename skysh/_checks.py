@@ -8,12 +8,14 @@ Input checks shared by every public function of skysh
 -   :func:`check_scalar`: one real number (optionally in a closed interval).
 -   :func:`check_dirs`: refuse direction arrays that are not (..., 3) unit vectors.
 -   :func:`check_bands`: refuse a band count outside [1, max].
+-   :func:`check_coeffs`: refuse SH coefficients that are not (K,), (K, C) or (..., K, C), K = N**2.
 -   :func:`check_count`: refuse an integer count outside [low, high].
 -   :func:`check_seed`: refuse a random seed that is not None or an integer >= 0.
 -   :func:`check_size`: refuse work whose arrays would exceed :data:`MAX_ARRAY_ELEMENTS`.
 -   :func:`check_choice`: refuse a name that is not one of the valid ones, listing them.
 -   :func:`check_flag`: refuse anything but ``bool`` / ``numpy.bool_`` (a TypeError).
 -   :func:`number_text`: a float as text that reads back exactly (for messages).
+-   :func:`interval_text`: a closed interval as the documentation writes it ("[2.5, 6]", "[0, pi/2]").
 -   :func:`short_repr`: a one-line, bounded repr of any value (for messages).
 
 Every failure is a :class:`ValueError` whose message names the parameter and the
@@ -30,6 +32,7 @@ means nothing and is refused. Sizes: no function builds an array of more than
 from __future__ import annotations
 
 import math
+from fractions import Fraction
 from typing import Any
 
 import numpy as np
@@ -42,12 +45,14 @@ __all__ = [
     "check_scalar",
     "check_dirs",
     "check_bands",
+    "check_coeffs",
     "check_count",
     "check_seed",
     "check_size",
     "check_flag",
     "check_choice",
     "number_text",
+    "interval_text",
     "short_repr",
     "read_only",
 ]
@@ -69,6 +74,21 @@ def number_text(value: Any) -> str:
     if x.is_integer() and abs(x) < 1e16:
         return str(int(x))
     return repr(x)
+
+
+def interval_text(low: float, high: float, pi: bool = False) -> str:
+    """``[low, high]`` as the docs write a domain: each end by :func:`number_text`, or with ``pi``
+    as a multiple k pi / n (n <= 12) where it is one to rounding ("0", "pi/2", "3 pi/4")."""
+
+    def end(x: float) -> str:
+        ratio = Fraction(x / math.pi).limit_denominator(12)
+        if not pi or abs(float(ratio) * math.pi - x) > 4.0 * math.ulp(abs(x)):
+            return number_text(x)
+        k, n = abs(ratio.numerator), ratio.denominator
+        sign, factor, divisor = "-" if ratio < 0 else "", "" if k == 1 else f"{k} ", "" if n == 1 else f"/{n}"
+        return "0" if k == 0 else f"{sign}{factor}pi{divisor}"
+
+    return f"[{end(low)}, {end(high)}]"
 
 
 def short_repr(value: Any) -> str:
@@ -157,6 +177,26 @@ def check_count(value: Any, name: str, low: int, high: int) -> int:
 def check_bands(bands: int, name: str = "bands", high: int = 64) -> int:
     """Return ``bands`` as an int after checking 1 <= bands <= high."""
     return check_count(bands, name, 1, high)
+
+
+def check_coeffs(coeffs: ArrayLike, name: str = "coeffs", high: int = 64, *, low: int = 1,
+                 vector: bool = True) -> tuple[NDArray[np.float64], bool, int]:
+    """SH coefficients as a (..., K, C) float64 array, whether they came as one (K,) vector, and N.
+
+    K = N**2 coefficients (docs/conventions.md order) of N bands in [low, high], C channels. A (K,)
+    vector is accepted when ``vector`` (and returned as (K, 1)); otherwise the channel axis is
+    required. The message names ``name``, the accepted shapes and the valid K.
+    """
+    c = as_float_array(coeffs, name)
+    is_vector = vector and c.ndim == 1
+    c = c[:, None] if is_vector else c
+    bands = math.isqrt(c.shape[-2]) if c.ndim >= 2 else 0
+    if c.ndim < 2 or not low <= bands <= high or bands * bands != c.shape[-2]:
+        shapes = "(K,), (K, C) or (..., K, C)" if vector else "(K, C) or (..., K, C)"
+        counts = ", ".join(str(n * n) for n in range(low, min(high, low + 7) + 1)) + (", ..." if high > low + 7 else "")
+        valid = f"K = {low * low} ({low} bands)" if low == high else f"K = N**2, N in [{low}, {high}] (K in ({counts}))"
+        raise ValueError(f"{name} must have shape {shapes} with {valid}, got {c.shape}")
+    return c, is_vector, bands
 
 
 def check_seed(seed: Any, name: str = "seed") -> int | None:

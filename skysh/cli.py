@@ -45,6 +45,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
+from skysh.argtypes import integer
 from skysh.cli_text import (
     TABLE_ZERO_BELOW,
     format_coefficients,
@@ -75,6 +76,10 @@ EXIT_USAGE: int = 2
 
 EXIT_INTERNAL: int = 1
 """Exit status of an unexpected failure (a bug): one line naming it, no traceback."""
+
+RENDER_WIDTH_RANGE: tuple[int, int] = (16, 4096)
+"""Accepted ``skysh render --width``, pixels per panel (skysh.render.PANEL_WIDTH_RANGE, repeated here
+so that building the parser imports nothing; tests/test_code_health.py checks they agree)."""
 
 DEFAULT_RENDER_WIDTH: int = 448
 """Default ``skysh render --width`` (skysh.render.DEFAULT_PANEL_WIDTH, repeated here so that
@@ -120,14 +125,8 @@ def _positive(text: str) -> float:
     return value
 
 
-def _bands(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
-    return value
+_bands = integer(1)
+"""``--bands``: a positive integer (the coefficient file's bands are checked once it is loaded)."""
 
 
 def _albedo(text: str) -> float | tuple[float, ...]:
@@ -138,11 +137,8 @@ def _albedo(text: str) -> float | tuple[float, ...]:
     return values[0] if len(values) == 1 else values
 
 
-def _width(text: str) -> int:
-    value = _bands(text)
-    if not 16 <= value <= 4096:
-        raise argparse.ArgumentTypeError(f"expected an integer in [16, 4096], got {text!r}")
-    return value
+_width = integer(*RENDER_WIDTH_RANGE)
+"""``skysh render --width``."""
 
 
 # --------------------------------------------------------------------------- #
@@ -151,8 +147,8 @@ def _width(text: str) -> int:
 def _add_sun(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("the sun (either its angles, or a place and a time)", "Frame: +X = East, +Y = "
                                       "North, +Z = up; azimuth from +X towards +Y (East 0, North 90, South -90).")
-    group.add_argument("--sun-zenith", type=_finite, metavar="DEG", help="sun zenith angle, degrees, [0, 90] (0 = overhead, 90 = "
-                       "on the horizon)")
+    group.add_argument("--sun-zenith", type=_finite, metavar="DEG", help=f"sun zenith angle, degrees, {_sun_zenith_range()} (0 = "
+                       "overhead, 90 = on the horizon)")
     group.add_argument("--sun-azimuth", type=_finite, metavar="DEG", help="sun azimuth, degrees, any finite value (default 0)")
     group.add_argument("--lat", type=_finite, metavar="DEG", help="latitude, degrees, [-90, 90], positive North (with --lon and "
                        "--time)")
@@ -255,8 +251,8 @@ def _add_render_parser(commands: Any) -> None:
     render.add_argument("--out", type=Path, required=True, metavar="FILE.png", help="PNG file to write")
     render.add_argument("--bands", type=_bands, default=3, metavar="N", help="SH bands N, [1, 7]; default 3")
     render.add_argument("--width", type=_width, default=DEFAULT_RENDER_WIDTH, metavar="W", help="width of each panel in pixels, "
-                        f"[16, 4096]; default {DEFAULT_RENDER_WIDTH} (height W/2; the three panels with their axes make an "
-                        "image about 1,660 pixels wide)")
+                        f"[{RENDER_WIDTH_RANGE[0]}, {RENDER_WIDTH_RANGE[1]}]; default {DEFAULT_RENDER_WIDTH} (height W/2; "
+                        "the three panels with their axes make an image about 1,660 pixels wide)")
     render.add_argument("--no-gibbs", action="store_true", help="skip the zonal sinc Gibbs filter")
     _add_lights(render)
     render.set_defaults(handler=_cmd_render)
@@ -342,15 +338,25 @@ def _sun_angles(args: argparse.Namespace) -> _Sun:
 
     low, high = (math.degrees(v) for v in SUN_ZENITH_DOMAIN)
     if not low <= args.sun_zenith <= high:
-        raise _UsageError(f"--sun-zenith must lie in [{low:g}, {high:g}] degrees, got {number_text(args.sun_zenith)}")
+        raise _UsageError(f"--sun-zenith must lie in {_sun_zenith_range()} degrees, got {number_text(args.sun_zenith)}")
     return _Sun(args.sun_zenith, 0.0 if args.sun_azimuth is None else args.sun_azimuth, {}, given=True)
 
 
 def _turbidity_range() -> str:
     """The fitted turbidity domain as help text, "[low, high]" (from :data:`skysh.poly.TURBIDITY_DOMAIN`)."""
+    from skysh._checks import interval_text
     from skysh.poly import TURBIDITY_DOMAIN
 
-    return "[{:g}, {:g}]".format(*TURBIDITY_DOMAIN)
+    return interval_text(*TURBIDITY_DOMAIN)
+
+
+def _sun_zenith_range() -> str:
+    """The fitted sun-zenith domain in degrees as help text, "[0, 90]" (:data:`skysh.poly.SUN_ZENITH_DOMAIN`)."""
+    from skysh._checks import interval_text
+    from skysh.poly import SUN_ZENITH_DOMAIN
+
+    low, high = SUN_ZENITH_DOMAIN
+    return interval_text(math.degrees(low), math.degrees(high))
 
 
 def _check_turbidity(turbidity: float) -> None:
@@ -358,7 +364,7 @@ def _check_turbidity(turbidity: float) -> None:
 
     low, high = TURBIDITY_DOMAIN
     if not low <= turbidity <= high:
-        raise _UsageError(f"--turbidity must lie in [{low:g}, {high:g}] (the fitted domain), got {number_text(turbidity)}")
+        raise _UsageError(f"--turbidity must lie in {_turbidity_range()} (the fitted domain), got {number_text(turbidity)}")
 
 
 def _check_bands(bands: int, sky: Any) -> None:

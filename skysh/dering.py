@@ -35,7 +35,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from skysh import sh, shmin
-from skysh._checks import as_float_array, check_bands, check_choice, check_dirs, check_flag, short_repr
+from skysh._checks import as_float_array, check_bands, check_choice, check_coeffs, check_dirs, check_flag, short_repr
 from skysh.shmin import exact_min
 
 __all__ = ["DeringWarning", "DERING_TARGETS", "DERING_METHODS", "MAX_DERING_BANDS", "SEED_WINDOW_SIZES",
@@ -332,7 +332,7 @@ def dering(
     check_choice(target, "target", DERING_TARGETS)
     check_choice(method, "method", DERING_METHODS)
     return_failed = check_flag(return_failed, "return_failed")
-    c, vector, bands = shmin.check_coeffs(coeffs, high=MAX_DERING_BANDS)
+    c, vector, bands = check_coeffs(coeffs, high=MAX_DERING_BANDS)
     flat = c.reshape((-1,) + c.shape[-2:])
     rows = _rows(bands, target)
     t, _, zero = shmin.normalised(np.swapaxes(flat, -1, -2))

@@ -51,6 +51,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from skysh import runtime, sh
+from skysh._checks import interval_text
 from skysh._version import __version__
 from skysh.export import ExportTables, export_tables
 from skysh.export_js_parts import DECLARATIONS, irradiance_json, js_dering, js_irradiance, js_lights, lights_json
@@ -197,8 +198,8 @@ _HEADER: str = '''\
  *
  * coefficients(sunZenith, turbidity, sunAzimuth = 0, options = {}) returns an array of
  * bands * bands * 3 numbers: coefficient i = l (l + 1) + m, then R, G, B (index 3 i + c).
- * Angles in radians: sun zenith [0, pi/2], any finite azimuth (from +X towards +Y);
- * turbidity [2.5, 6]. Frame: Z up. Real orthonormal SH with the Condon-Shortley phase.
+ * Angles in radians: sun zenith $sun_zenith_domain, any finite azimuth (from +X towards +Y);
+ * turbidity $turbidity_domain. Frame: Z up. Real orthonormal SH with the Condon-Shortley phase.
  * Linear sRGB, cd/m^2 (irradiance: cd/m^2 x sr, lux for the luminance). Same numbers as
  * skysh.SkySH.coefficients(sun_zenith, turbidity, sun_azimuth, bands, gibbs, dering, irradiance,
  * sun=..., ground_albedo=..., irradiance_table=...). sunLight(sunZenith, turbidity, sunAzimuth = 0)
@@ -608,6 +609,8 @@ def module_source(sky: runtime.SkySH, bands: int | None = None) -> str:
     header = Template(_HEADER).substitute(
         version=__version__, options=_options_text(n, sky), max_bands=n, default_bands=default,
         dering_bands=", ".join(map(str, dering[0])) or "none", engine_list=names,
+        sun_zenith_domain=interval_text(*tables.sun_zenith_domain, pi=True),
+        turbidity_domain=interval_text(*tables.turbidity_domain),
     )
     gibbs = np.concatenate([runtime.gibbs_factors(k) for k in range(1, n + 1)])
     constants = {k: double_literal(v) for k, v in ZENITH_CONSTANTS.items()}
@@ -641,11 +644,13 @@ def declarations(sky: runtime.SkySH, bands: int | None = None) -> str:
     ValueError
         ``bands`` out of range.
     """
-    n = export_tables(sky, sky.bands if bands is None else bands).bands
+    tables = export_tables(sky, sky.bands if bands is None else bands)
+    n = tables.bands
     names = list(_engine_plans(n))
     return DECLARATIONS.substitute(
         version=__version__, options=_options_text(n, sky), max_bands=n, default_bands=min(3, n),
         engine_union=" | ".join(json.dumps(e) for e in names) or "never",
+        turbidity_domain=interval_text(*tables.turbidity_domain),
     )
 
 

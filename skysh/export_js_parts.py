@@ -330,7 +330,7 @@ export declare const TURBIDITY_DOMAIN: readonly [number, number];
 
 /**
  * The sky's SH coefficients for one frame: bands * bands * 3 numbers, coefficient-major RGB
- * (or the engine's values). Radians; turbidity in [2.5, 6]. Throws RangeError / TypeError.
+ * (or the engine's values). Radians; turbidity in $turbidity_domain. Throws RangeError / TypeError.
  */
 export declare function coefficients<T extends number[] | Float64Array>(
   sunZenith: number, turbidity: number, sunAzimuth: number | undefined, options: CoefficientOptions & { out: T },

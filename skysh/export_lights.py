@@ -48,14 +48,10 @@ Then the per-band factor (``A_l`` for irradiance, an engine's) multiplies the su
 
 The certified irradiance table (:func:`irradiance_parts`)
 ---------------------------------------------------------
-``irradiance_table`` follows :meth:`skysh.SkySH.coefficients`: by intent (C and the
-shaders: :data:`BY_INTENT`; JavaScript: ``null``) the 3-band sky's rows come from the
-file's irradiance table (its radiance-equivalent E_lm / A_l over the luminance scale,
-m >= 0) for diffuse light (irradiance, or an engine) without the Gibbs filter and
-with deringing; 0 (false) never; 1 (true) always, refused with ``gibbs`` or without
-the table (3-band exports of a format-4 file). Its rows are summed as the sky's (Habel
-eq. 1), scaled, rotated (eq. 4) and followed by the sun, the ground (lit by the
-*sky's* unfiltered c_10) and the per-band factor; never filtered, never deringed.
+``irradiance_table`` follows :meth:`skysh.SkySH.coefficients` (by intent: :data:`BY_INTENT`
+in C and the shaders, ``null`` in JavaScript; 0 never; 1 always): the 3-band sky's rows come
+from the file's table (E_lm / A_l over the luminance scale, m >= 0), are summed, scaled and
+rotated as the sky's (Habel eqs. 1, 4), never filtered or deringed (``docs/irradiance.md``).
 
 References
 ----------
@@ -74,7 +70,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from skysh import coefficient_file, ground, lights, poly, solar, sunlight
+from skysh import coefficient_file, ground, lights, poly, preetham, solar, sunlight
 from skysh._checks import check_bands, check_choice, check_scalar
 
 __all__ = [
@@ -86,18 +82,19 @@ __all__ = [
 FLOAT32_MAX: float = float(np.finfo(np.float32).max)
 """Largest finite float32: beyond it a float32 literal would read back as inf."""
 
+_FLOAT64_MAX: float = float(np.finfo(np.float64).max)
+"""Largest finite double: a double literal's range."""
+
 TABLE_LANGUAGES: tuple[str, ...] = ("c", "glsl", "hlsl", "js")
 """Languages :func:`embed_table` writes."""
 
 ZENITH_CONSTANTS: dict[str, float] = {
     "c4_9": 4.0 / 9.0, "c120": 120.0, "c1000": 1000.0,
-    "c40453": 4.0453, "c49710": 4.9710, "c02155": 0.2155, "c24192": 2.4192,
+    **dict(zip(("c40453", "c49710", "c02155", "c24192"), preetham.ZENITH_LUMINANCE)),
     "pi": math.pi, "two_pi": 2.0 * math.pi, "c0": 0.0, "c1": 1.0, "c2": 2.0,
 }
-"""Named numbers of every export's code: the zenith luminance of Preetham (1999, appendix),
-``Y_z = 1000 ((4.0453 T - 4.9710) tan chi - 0.2155 T + 2.4192)``, ``chi = (4/9 - T/120)(pi - 2 ts)``
-(``skysh.preetham`` keeps them inline, so they are repeated here once; the tests compare every
-export with the runtime, which would catch a difference), and pi, 2 pi, 0, 1, 2."""
+"""Named numbers of every export's code: the zenith luminance's (:data:`skysh.preetham.ZENITH_LUMINANCE`,
+written ``(c40453 T - c49710) tan chi - c02155 T + c24192``), and pi, 2 pi, 0, 1, 2."""
 
 BY_INTENT: int = -1
 """The C and shader value of ``irradiance_table`` that means the runtime's default (None): by intent."""
@@ -106,15 +103,25 @@ _PER_LINE: int = 6
 """Numbers per line of an embedded table."""
 
 
+_PLAIN_REALS: tuple[type, ...] = (float, np.float64, np.float32)
+
+
+def _checked_real(value: Any, high: float, unit: str = "") -> float:
+    """``value`` in [-high, high]: a float by one comparison (NaN fails it), the rest by ``check_scalar``."""
+    if type(value) in _PLAIN_REALS and -high <= value <= high:
+        return float(value)
+    return check_scalar(value, "value", -high, high, unit=unit)
+
+
 def double_literal(value: float) -> str:
     """Shortest text that reads back as the same double, always with a '.' or an exponent."""
-    text = repr(check_scalar(value, "value"))
+    text = repr(_checked_real(value, _FLOAT64_MAX))
     return text if any(ch in text for ch in ".en") else text + ".0"
 
 
 def float32_literal(value: float) -> str:
     """Shortest text that reads back as the same float32 (valid in C, GLSL and HLSL, no suffix)."""
-    number = check_scalar(value, "value", -FLOAT32_MAX, FLOAT32_MAX, unit="(the float32 range)")
+    number = _checked_real(value, FLOAT32_MAX, unit="(the float32 range)")
     return np.format_float_scientific(np.float32(number), unique=True, trim="0")
 
 

@@ -45,7 +45,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from skysh import sh
-from skysh._checks import as_float_array, check_dirs, check_size
+from skysh._checks import as_float_array, check_coeffs, check_dirs, check_size
 
 __all__ = [
     "L0_SCALE",
@@ -58,6 +58,7 @@ __all__ = [
     "ANTIPODAL_FACTOR",
     "GEOMERICS_EXPONENT_ENDS",
     "SYMMETRY_TOLERANCE",
+    "MAX_BANDS",
     "to_normalised",
     "from_normalised",
     "radiance",
@@ -99,6 +100,9 @@ GEOMERICS_EXPONENT_ENDS: tuple[float, float] = (1.0, ANTIPODAL_FACTOR - 1.0)
 """Exponent p of the non-linear L1 at r = 0 (1: the linear limit) and r = 1 (3: a = 0 with
 (1 - a)(p + 1) = 4 r); p is linear in between: p = 1 + 2 r (docs/hazel.md, step 3)."""
 
+MAX_BANDS: int = 3
+"""Bands of Hazel's basis (B0, B1, B2): K = 1, 4 or 9 orthonormal coefficients."""
+
 SYMMETRY_TOLERANCE: float = 1e-9
 """Relative asymmetry or trace of R2 (to its largest entry) accepted by :func:`from_normalised`:
 far above rounding (1e-16), far below any meaningful L2 term."""
@@ -107,19 +111,6 @@ far above rounding (1e-16), far below any meaningful L2 term."""
 # --------------------------------------------------------------------------- #
 # Basis change
 # --------------------------------------------------------------------------- #
-def _check_coeffs(coeffs: ArrayLike, name: str = "coeffs") -> tuple[NDArray[np.float64], bool]:
-    """(..., K, C) float array with K in {1, 4, 9}, and whether the input was a (K,) vector."""
-    c = as_float_array(coeffs, name)
-    vector = c.ndim == 1
-    if vector:
-        c = c[:, None]
-    if c.ndim < 2 or c.shape[-2] not in (1, 4, 9):
-        raise ValueError(
-            f"{name} must have shape (K,), (K, C) or (..., K, C) with K in (1, 4, 9) (bands <= 3), got {c.shape}"
-        )
-    return c, vector
-
-
 def to_normalised(coeffs: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """
     Orthonormal (Condon-Shortley) SH -> Hazel's normalised (R0, R1, R2) (table in docs/hazel.md).
@@ -149,7 +140,7 @@ def to_normalised(coeffs: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.fl
     >>> round(float(r0), 12), [round(float(v), 12) + 0.0 for v in r1]
     (1.0, [0.0, 0.0, 0.5])
     """
-    c, vector = _check_coeffs(coeffs)
+    c, vector, _ = check_coeffs(coeffs, high=MAX_BANDS)
     r0, r1, r2 = _to_normalised(c)
     if vector:
         return r0[..., 0], r1[..., 0, :], r2[..., 0, :, :]
@@ -251,7 +242,7 @@ def _batch_shape(c: NDArray, d: NDArray, name: str) -> tuple[int, ...]:
 
 
 def _reconstruct(coeffs: ArrayLike, dirs: ArrayLike, factors: tuple[float, float, float], name: str) -> NDArray:
-    c, vector = _check_coeffs(coeffs)
+    c, vector, _ = check_coeffs(coeffs, high=MAX_BANDS)
     d = check_dirs(dirs, name)
     _batch_shape(c, d, name)
     r0, r1, r2 = _to_normalised(c)
@@ -327,9 +318,7 @@ def geomerics_parameters(coeffs: ArrayLike) -> dict[str, NDArray[np.float64]]:
         |R1| / R0 come from no non-negative radiance; clamping keeps the
         result non-negative when R0 >= 0.
     """
-    c, vector = _check_coeffs(coeffs)
-    if c.shape[-2] < 4:
-        raise ValueError(f"coeffs must have K = 4 or 9 coefficients for the L1 reconstruction, got {c.shape}")
+    c, vector, _ = check_coeffs(coeffs, high=MAX_BANDS, low=2)  # the L1 reconstruction needs R1
     r0, r1, _ = _to_normalised(c[..., :4, :])
     length = np.linalg.norm(r1, axis=-1)
     direction = r1 / np.where(length > 0.0, length, 1.0)[..., None]
@@ -371,7 +360,7 @@ def irradiance_l1_nonlinear(coeffs: ArrayLike, normals: ArrayLike) -> NDArray[np
     light from one hemisphere, as a sky, it lights normals facing away from it:
     docs/hazel.md works the uniform upper hemisphere, where the linear L1 is exact.
     """
-    c, vector = _check_coeffs(coeffs)
+    c, vector, _ = check_coeffs(coeffs, high=MAX_BANDS)
     n = check_dirs(normals, "normals")
     _batch_shape(c, n, "normals")
     g = geomerics_parameters(c)

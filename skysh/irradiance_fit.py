@@ -11,7 +11,7 @@ is imported inside the functions that solve.
 
 -   :func:`quadratic_parts`: (c, g, A) of f(w) = c + g.w + w^T A w from 9 SH coefficients.
 -   :func:`lifted_matrix`: the 4x4 matrix M(mu) whose PSD-ness certifies f >= 0.
--   :func:`sphere_minimum`: the exact minimum of a 3-band function on the sphere.
+-   :func:`sphere_minimum`: the minimum of a 3-band function on the sphere (never above it; :mod:`skysh.shmin`).
 -   :func:`true_irradiance`: the sky's converged irradiance coefficients (many bands).
 -   :func:`half_sphere_normals`: the normals the worst-case objectives are taken over.
 -   :func:`constrained_coefficients`: one sky's constrained optimum, every channel.
@@ -27,8 +27,10 @@ index l (l + 1) + m), shaped (9, 3); :func:`radiance_equivalent` divides by A_l.
 
 The certificate (S-lemma for one quadratic equality; derivation: ``docs/irradiance.md``)
 --------------------------------------------------------------------------------------
-A 3-band function is f(w) = c + g.w + w^T A w on the sphere (:func:`quadratic_parts`; the
-closed forms of the convention's table, with the Condon-Shortley minus signs). For any
+A 3-band function is f(w) = c + g.w + w^T A w on the sphere (:func:`quadratic_parts`, from
+:data:`skysh.shmin.FORM_MAP`: the closed forms of the convention's table, with the
+Condon-Shortley minus signs, A traceless; any multiple of (1 - |w|^2) may be moved between
+c and A, and is absorbed by mu below). For any
 real mu and |w| = 1, f(w) = (1, w) M(mu) (1, w)^T with ``M(mu) = [[c + mu, g^T / 2],
 [g / 2, A - mu I]]`` (:func:`lifted_matrix`): M(mu) PSD for some mu => f >= 0, and
 conversely (no duality gap for one quadratic equality: More and Sorensen 1983; Stern and
@@ -36,7 +38,7 @@ Wolkowicz 1995; Polik and Terlaky 2007), so "f >= 0 on the sphere" is exactly a 
 linear matrix inequality in the coefficients: exact, not a relaxation. A margin s
 (f >= s) is the same for M(mu) - s e_0 e_0^T; :func:`constrained_coefficients` uses
 s = margin x mean(f), mean(f) = Y00 e0, linear in the unknowns. :func:`sphere_minimum`
-evaluates the dual max_mu d(mu) = min_sphere f by bisection on the secular equation.
+evaluates the dual max_mu d(mu) = min_sphere f (:func:`skysh.shmin.exact_min`, never above it).
 
 Colour and symmetry (derivations: ``docs/irradiance.md``)
 --------------------------------------------------------
@@ -67,11 +69,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from skysh import fit, preetham, sh
-from skysh._checks import as_float_array, check_bands, check_choice, check_range
+from skysh import fit, preetham, sh, shmin
+from skysh._checks import as_float_array, check_bands, check_choice, check_coeffs, check_count, check_range
 
 __all__ = [
-    "Y00", "K_LINEAR", "K_PRODUCT", "K_ZONAL", "K_SECTORAL", "LOBE", "HALF_ROWS", "LIFT_MAP", "MU_MATRIX",
+    "Y00", "LOBE", "HALF_ROWS", "LIFT_MAP", "MU_MATRIX",
     "METHODS", "TRUTH_BANDS", "TRUTH_THETA_NODES", "OPTIMISATION_NORMALS", "LP_EXPONENT", "BLEND_WEIGHT",
     "CHROMA_FLOOR", "Objective", "RECOMMENDED", "quadratic_parts", "lifted_matrix", "sphere_minimum", "radiance_equivalent",
     "true_irradiance", "half_sphere_normals", "constrained_coefficients", "constrained_point",
@@ -79,20 +81,8 @@ __all__ = [
     "NONNEG_POINTS", "HELD_OUT_SEED", "build_table",
 ]
 
-Y00: float = 0.5 / math.sqrt(math.pi)
+Y00: float = shmin.Y00
 """Y(0, 0) = 1 / (2 sqrt(pi)); the mean of a function over the sphere is Y00 e0."""
-
-K_LINEAR: float = math.sqrt(3.0) / (2.0 * math.sqrt(math.pi))
-"""|Y(1, m)| per Cartesian component: sqrt(3) / (2 sqrt(pi))."""
-
-K_PRODUCT: float = math.sqrt(15.0) / (2.0 * math.sqrt(math.pi))
-"""Factor of xy, yz, xz in Y(2, -2), Y(2, -1), Y(2, 1): sqrt(15) / (2 sqrt(pi))."""
-
-K_ZONAL: float = math.sqrt(5.0) / (4.0 * math.sqrt(math.pi))
-"""Factor of (3 z^2 - 1) in Y(2, 0): sqrt(5) / (4 sqrt(pi))."""
-
-K_SECTORAL: float = math.sqrt(15.0) / (4.0 * math.sqrt(math.pi))
-"""Factor of (x^2 - y^2) in Y(2, 2): sqrt(15) / (4 sqrt(pi))."""
 
 LOBE: NDArray[np.float64] = sh.cosine_lobe(3)[np.repeat(np.arange(3), 2 * np.arange(3) + 1)]
 """(9,) clamped-cosine factor A_l of every 3-band coefficient (pi, 2 pi / 3 x 3, pi / 4 x 5)."""
@@ -104,17 +94,13 @@ the layout of :func:`skysh.coefficient_file.zonal_half_layout` (3)."""
 
 
 def _lift_map() -> NDArray[np.float64]:
-    """(9, 4, 4): M(mu) = sum_i e_i LIFT_MAP[i] + mu MU_MATRIX, rows/columns ordered (1, x, y, z)."""
+    """(9, 4, 4): M(mu) = sum_i e_i LIFT_MAP[i] + mu MU_MATRIX, rows/columns ordered (1, x, y, z): row i of
+    :data:`skysh.shmin.FORM_MAP` (c_i, g_i, Q_i) as [[c_i, g_i^T / 2], [g_i / 2, Q_i]]."""
+    form = shmin.FORM_MAP
     m = np.zeros((9, 4, 4))
-    m[0, 0, 0] = Y00
-    m[1, 0, 2] = m[1, 2, 0] = -K_LINEAR / 2.0  # g_y = -k1 e1
-    m[2, 0, 3] = m[2, 3, 0] = K_LINEAR / 2.0  # g_z = k1 e2
-    m[3, 0, 1] = m[3, 1, 0] = -K_LINEAR / 2.0  # g_x = -k1 e3
-    m[4, 1, 2] = m[4, 2, 1] = K_PRODUCT / 2.0  # K1 e4 xy
-    m[5, 2, 3] = m[5, 3, 2] = -K_PRODUCT / 2.0  # -K1 e5 yz
-    m[6, 0, 0], m[6, 3, 3] = -K_ZONAL, 3.0 * K_ZONAL  # K0 e6 (3 z^2 - 1)
-    m[7, 1, 3] = m[7, 3, 1] = -K_PRODUCT / 2.0  # -K1 e7 xz
-    m[8, 1, 1], m[8, 2, 2] = K_SECTORAL, -K_SECTORAL  # K2 e8 (x^2 - y^2)
+    m[:, 0, 0] = form[:, 0]
+    m[:, 0, 1:] = m[:, 1:, 0] = 0.5 * form[:, 1:4]
+    m[:, 1:, 1:] = form[:, 4:].reshape(9, 3, 3)
     m.flags.writeable = False
     return m
 
@@ -158,15 +144,6 @@ LP_EXPONENT: int = 8
 """Exponent p of the ``"lp"`` blend: large enough to weigh the worst normals, small
 enough to stay smooth in the sky's parameters."""
 
-_BISECTION_STEPS: int = 200
-"""Bisection steps of :func:`sphere_minimum` on its bracket of width |g| / 2 <= 1 (the
-function scaled by its largest coefficient): the bracket ends at adjacent floats, or
-narrower than 2^-200 (1e-60), where d's error is below any rounding."""
-
-_NEAR_GAP: float = 1e-6
-"""Gap lambda_i - mu (of the function scaled to a largest coefficient 1) below which
-:func:`sphere_minimum`'s direction takes component i from the norm constraint, not -h_i / (2 gap)."""
-
 _SOLVER_OPTIONS: dict[str, Any] = {}
 """Clarabel's defaults (tolerances 1e-8 on the problem scaled so the true mean irradiance is 1), far
 below every figure the study prints; 1e-9 ends "optimal_inaccurate" on some worst-case problems."""
@@ -180,27 +157,21 @@ repairs by raising e0; a larger one is a solver failure (RuntimeError)."""
 # The quadratic form, the certificate and the exact minimum
 # --------------------------------------------------------------------------- #
 def _as_coeffs(coeffs: ArrayLike, name: str = "coeffs") -> tuple[NDArray[np.float64], bool]:
-    """(..., 9, C) float array from (9,) or (..., 9, C); flag whether the input was (9,)."""
-    c = as_float_array(coeffs, name)
-    vector = c.ndim == 1
-    if vector:
-        c = c[:, None]
-    if c.ndim < 2 or c.shape[-2] != 9:
-        raise ValueError(f"{name} must have shape (9,) or (..., 9, C) (3-band SH), got {c.shape}")
+    """(..., 9, C) float array from (9,), (9, C) or (..., 9, C); flag whether the input was (9,)."""
+    c, vector, _ = check_coeffs(coeffs, name, high=3, low=3)
     return c, vector
 
 
 def quadratic_parts(coeffs: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:
     """
-    The polynomial form f(w) = c + g.w + w^T A w of 3-band SH (closed forms: ``docs/irradiance.md``).
+    The polynomial form f(w) = c + g.w + w^T A w of 3-band SH on the unit sphere.
 
     ``coeffs`` (9,) or (..., 9, C), any unit. Returns c, g, A of shapes (..., C), (..., C, 3) and
-    (..., C, 3, 3) (without the C axis for (9,) input).
+    (..., C, 3, 3) (without the C axis for (9,) input): :func:`skysh.shmin.sphere_quadratic`
+    (A symmetric and traceless) with the coefficient axis second to last, as everywhere here.
     """
     e, vector = _as_coeffs(coeffs)
-    e = np.moveaxis(e, -2, -1)  # (..., C, 9)
-    lifted = np.einsum("...i,ijk->...jk", e, LIFT_MAP)
-    c, g, a = lifted[..., 0, 0], 2.0 * lifted[..., 0, 1:], lifted[..., 1:, 1:]
+    c, g, a = shmin.sphere_quadratic(np.moveaxis(e, -2, -1))  # (..., C, 9) -> (..., C), (..., C, 3), (..., C, 3, 3)
     return (c[..., 0], g[..., 0, :], a[..., 0, :, :]) if vector else (c, g, a)
 
 
@@ -221,61 +192,17 @@ def lifted_matrix(coeffs: ArrayLike, mu: ArrayLike, margin: float = 0.0) -> NDAr
 
 def sphere_minimum(coeffs: ArrayLike, return_dirs: bool = False) -> Any:
     """
-    Exact minimum of 3-band SH functions over the unit sphere (the dual of the module docstring).
+    Minimum of 3-band SH functions over the unit sphere, never above the true one.
 
     ``coeffs``: (9,) or (..., 9, C). Returns the minimum, (..., C) (a float for (9,) input), in
-    the coefficients' unit: max_mu d(mu), a lower bound at every bisection step (weak duality)
-    equal to the minimum to rounding once converged (:data:`_BISECTION_STEPS`); and with
-    ``return_dirs`` (..., C, 3) unit directions where it is attained (to rounding).
-
-    Notes
-    -----
-    A = Q diag(lambda) Q^T (lambda ascending), h = Q^T g. The root mu* < lambda_1 of
-    phi(mu) = sum h_i^2 / (4 (lambda_i - mu)^2) = 1 lies in [lambda_1 - |g| / 2, lambda_1]
-    (phi <= 1 at the left end); bisection keeps phi(lo) <= 1, where the concave
-    d(lo) is a lower bound. Each function is scaled by its largest coefficient first,
-    so no sum overflows. Vectorised, deterministic, no Python loop over functions.
+    the coefficients' unit, and with ``return_dirs`` (..., C, 3) unit directions where it is
+    attained (to rounding): :func:`skysh.shmin.exact_min` restricted to 3 bands, the dual
+    max_mu d(mu) of the module docstring at its root (Newton's method from a proven bound),
+    less a rounding allowance (2.3e-13 of the largest |coefficient|, rounded up to a power
+    of 2), so a value >= 0 certifies f >= 0.
     """
-    e, vector = _as_coeffs(coeffs)
-    scale = np.max(np.abs(e), axis=-2, keepdims=True)
-    scale = np.where(scale > 0.0, scale, 1.0)
-    c, g, a = quadratic_parts(e / scale)
-    lam, q = np.linalg.eigh(a)
-    h = np.einsum("...ji,...j->...i", q, g)
-    h2 = h * h
-    lo = lam[..., 0] - 0.5 * np.sqrt(np.sum(h2, axis=-1))
-    hi = lam[..., 0].copy()
-    for _ in range(_BISECTION_STEPS):
-        mid = 0.5 * (lo + hi)
-        gap = lam - mid[..., None]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            phi = np.sum(np.where(h2 > 0.0, h2 / (4.0 * gap * gap), 0.0), axis=-1)
-        inside = phi <= 1.0
-        lo = np.where(inside, mid, lo)
-        hi = np.where(inside, hi, mid)
-    gap = lam - lo[..., None]
-    # gap = 0 with h != 0 only when |g| / 2 is below the float spacing of lambda_1: the
-    # term is then below rounding (<= |g|) and is dropped, as in the hard case.
-    valid = (h2 > 0.0) & (gap > 0.0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        terms = np.where(valid, h2 / (4.0 * gap), 0.0)
-        y = np.where(valid, -h / (2.0 * gap), 0.0)  # w(mu) in the eigenbasis
-    minimum = (c + lo - np.sum(terms, axis=-1)) * scale[..., 0, :]
-    if vector:
-        minimum = minimum[..., 0]
-    if not return_dirs:
-        return float(minimum) if vector else minimum
-    # Components whose gap is at rounding level (the hard case and its neighbours) are inaccurate:
-    # they take the norm the others leave, along -h (along the smallest eigenvector when h = 0 there).
-    near = gap <= _NEAR_GAP
-    far = np.sum(np.where(near, 0.0, y * y), axis=-1, keepdims=True)
-    hn = np.where(near, -h, 0.0)
-    hn[..., 0] = np.where(np.sum(hn * hn, axis=-1) > 0.0, hn[..., 0], 1.0)
-    missing = np.sqrt(np.maximum(0.0, 1.0 - far) / np.sum(hn * hn, axis=-1, keepdims=True))
-    y = np.where(near, hn * missing, y)
-    w = np.einsum("...ij,...j->...i", q, y)
-    w /= np.linalg.norm(w, axis=-1, keepdims=True)
-    return (float(minimum), w[..., 0, :]) if vector else (minimum, w)
+    _as_coeffs(coeffs)  # 3 bands only: the S-lemma certificate of this module
+    return shmin.exact_min(coeffs, return_dirs)
 
 
 def radiance_equivalent(coeffs: ArrayLike) -> NDArray[np.float64]:
@@ -322,15 +249,6 @@ def true_irradiance(
     return sh.irradiance(preetham.sky_sh(sun_zenith, turbidity, bands, colourspace=colourspace, n=n))
 
 
-def _fibonacci_sphere(count: int) -> NDArray[np.float64]:
-    """``count`` points of the Fibonacci (golden-angle) spiral on the unit sphere, z descending."""
-    i = np.arange(count) + 0.5
-    z = 1.0 - 2.0 * i / count
-    r = np.sqrt(np.maximum(0.0, 1.0 - z * z))
-    phi = i * (math.pi * (3.0 - math.sqrt(5.0)))
-    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
-
-
 def half_sphere_normals(count: int = OPTIMISATION_NORMALS) -> NDArray[np.float64]:
     """
     The y >= 0 half of a ``count``-point Fibonacci sphere, plus the zenith and the nadir.
@@ -339,9 +257,8 @@ def half_sphere_normals(count: int = OPTIMISATION_NORMALS) -> NDArray[np.float64
     solutions sought) takes all its values there. Returns (M, 3) unit vectors,
     M about count / 2 + 2. ``count`` in [16, 10^6].
     """
-    if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or not 16 <= count <= 10**6:
-        raise ValueError(f"count must be an integer in [16, 1000000], got {count!r}")
-    points = _fibonacci_sphere(int(count))
+    count = check_count(count, "count", 16, 10**6)
+    points = shmin.fibonacci(int(count))
     return np.concatenate([points[points[:, 1] >= 0.0], [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]]])
 
 

@@ -14,7 +14,7 @@ Model domain: sun zenith angle in [0, pi/2] rad, turbidity in [1.7, 10]. Below a
 turbidity of about 2 the model is unreliable (``PREETHAM.md``): B_Y turns
 positive near T = 1.2 so exp(B / cos theta) explodes at the horizon, and Zotti
 et al. (2007) find the horizon far too bright below T = 2.5, which is why the
-fitted runtime only covers [2.5, 6].
+fitted runtime only covers turbidity [2.5, 6].
 
 Conversions xyY -> XYZ -> RGB go through colour-science, imported on first use
 (``import skysh`` does not import it). The XYZ -> RGB matrix is the colourspace's
@@ -114,6 +114,10 @@ ZENITH_Y_MATRIX: NDArray[np.float64] = np.array(
     [[0.00275, -0.00610, 0.00317, 0.0], [-0.04214, 0.08970, -0.04153, 0.00516], [0.15346, -0.26756, 0.06670, 0.26688]]
 )
 """Zenith chromaticity y = [T^2, T, 1] M_y [ts^3, ts^2, ts, 1]^T."""
+
+ZENITH_LUMINANCE: tuple[float, float, float, float] = (4.0453, 4.9710, 0.2155, 2.4192)
+"""(a, b, c, d) of the zenith luminance Y_z = 1000 ((a T - b) tan chi - c T + d) cd/m^2 with
+chi = (4/9 - T/120)(pi - 2 ts) (Preetham 1999, appendix; the exports write these same numbers)."""
 
 _PEREZ_Y_SLOPE: tuple[float, ...] = tuple(float(v) for v in PEREZ_Y[:, 0])
 _PEREZ_Y_INTERCEPT: tuple[float, ...] = tuple(float(v) for v in PEREZ_Y[:, 1])
@@ -215,8 +219,9 @@ def zenith_luminance(sun_zenith: ArrayLike, turbidity: ArrayLike) -> NDArray[np.
 def zenith_luminance_unchecked(ts: Any, t: Any, ops: Any = math) -> Any:
     """:func:`zenith_luminance` without its checks, for per-frame paths that checked once: floats with
     ``ops = math`` or arrays with ``ops = numpy`` (any namespace with ``tan``), in the model's domain."""
+    a, b, c, d = ZENITH_LUMINANCE
     chi = (4.0 / 9.0 - t / 120.0) * (math.pi - 2.0 * ts)
-    return 1000.0 * ((4.0453 * t - 4.9710) * ops.tan(chi) - 0.2155 * t + 2.4192)
+    return 1000.0 * ((a * t - b) * ops.tan(chi) - c * t + d)
 
 
 def luminance_scale_unchecked(ts: Any, t: Any, ops: Any = math) -> Any:

@@ -58,7 +58,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from skysh import sh
-from skysh._checks import as_float_array, check_choice, check_flag
+from skysh._checks import as_float_array, check_choice, check_coeffs, check_count, check_flag
 
 __all__ = [
     "BOUND_NAMES",
@@ -87,8 +87,11 @@ BITS_RANGE: tuple[int, int] = (2, 32)
 DEFAULT_BITS: int = 8
 """The seed's bit depth: four coefficients per 32-bit word."""
 
-N_COEFFS: int = 9
-"""Coefficients per channel handled by the codec (bands l = 0, 1, 2)."""
+BANDS: int = 3
+"""Bands handled by the codec (l = 0, 1, 2)."""
+
+N_COEFFS: int = BANDS * BANDS
+"""Coefficients per channel handled by the codec (9)."""
 
 _L_OF_K: tuple[int, ...] = tuple(sh.lm(k)[0] for k in range(1, N_COEFFS))
 _M_OF_K: tuple[int, ...] = tuple(sh.lm(k)[1] for k in range(1, N_COEFFS))
@@ -138,17 +141,13 @@ class QuantizationClampWarning(UserWarning):
 # --------------------------------------------------------------------------- #
 # Checks and helpers
 # --------------------------------------------------------------------------- #
-def _check_coeffs(coeffs: ArrayLike, name: str = "coeffs") -> NDArray[np.float64]:
-    c = as_float_array(coeffs, name)
-    if c.ndim < 2 or c.shape[-2] != N_COEFFS:
-        raise ValueError(f"{name} must have shape (9, C) or (..., 9, C) (bands l <= 2), got {c.shape}")
-    return c
+def _codec_coeffs(coeffs: ArrayLike) -> NDArray[np.float64]:
+    """(..., 9, C) float64: the codec's 3 bands, the channel axis required (:func:`skysh._checks.check_coeffs`)."""
+    return check_coeffs(coeffs, high=BANDS, low=BANDS, vector=False)[0]
 
 
 def _check_bits(bits: int) -> int:
-    if isinstance(bits, bool) or not isinstance(bits, (int, np.integer)) or not BITS_RANGE[0] <= bits <= BITS_RANGE[1]:
-        raise ValueError(f"bits must be an integer in [{BITS_RANGE[0]}, {BITS_RANGE[1]}], got {bits!r}")
-    return int(bits)
+    return check_count(bits, "bits", *BITS_RANGE)
 
 
 def _layout(bits: int) -> tuple[int, int]:
@@ -235,7 +234,7 @@ def ratios(coeffs: ArrayLike, bound: str = "tight", irradiance: bool = False) ->
         such SH come from no non-negative function; :func:`compress` clamps them).
     """
     irradiance = check_flag(irradiance, "irradiance")
-    c = _check_coeffs(coeffs)
+    c = _codec_coeffs(coeffs)
     return _ratios(c, bounds(bound, bool(irradiance)))
 
 
@@ -310,7 +309,7 @@ def compress(
     ((1, 2), True)
     """
     sqrt, irradiance = check_flag(sqrt, "sqrt"), check_flag(irradiance, "irradiance")
-    c = _check_coeffs(coeffs)
+    c = _codec_coeffs(coeffs)
     bits = _check_bits(bits)
     scale = bounds(bound, bool(irradiance))
     v = _clamped(_ratios(c, scale))
@@ -464,7 +463,7 @@ def table3_errors(
         Bits per coefficient, [2, 32].
     n_theta
         Gauss nodes in cos(theta) of the sphere rule used for the L1 error
-        (:func:`skysh.sh.quadrature_rule`), >= 3.
+        (:func:`skysh.sh.quadrature_rule`), [3, :data:`skysh.sh.MAX_GAUSS_NODES`].
 
     Returns
     -------
@@ -487,7 +486,7 @@ def table3_errors(
     L2 / sqrt(P C)``. The irradiance rows compress ``sh.irradiance(coeffs)`` with
     ``irradiance=True``.
     """
-    checked = _check_coeffs(coeffs)
+    checked = _codec_coeffs(coeffs)
     c: NDArray[np.float64] = checked.reshape((-1, N_COEFFS, checked.shape[-1]))
     if c.shape[0] == 0:
         raise ValueError("coeffs must hold at least one probe")
@@ -495,10 +494,9 @@ def table3_errors(
         raise ValueError(
             "coeffs must have a positive DC coefficient in every probe and channel (non-negative functions)"
         )
-    if isinstance(n_theta, bool) or not isinstance(n_theta, (int, np.integer)) or n_theta < 3:
-        raise ValueError(f"n_theta must be an integer >= 3, got {n_theta!r}")
+    n_theta = check_count(n_theta, "n_theta", 3, sh.MAX_GAUSS_NODES)
     bits = _check_bits(bits)
-    dirs, weights = sh.quadrature_rule(int(n_theta))
+    dirs, weights = sh.quadrature_rule(n_theta)
     basis_t = sh.basis(dirs, 3)  # (M, 9)
     weighted = weights / (4.0 * math.pi)
     y00 = 0.5 / math.sqrt(math.pi)

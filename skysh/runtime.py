@@ -253,8 +253,8 @@ class SkySH:
         Parameters
         ----------
         sun_zenith, turbidity, sun_azimuth
-            Radians in [0, pi/2] (zenith to horizon); [2.5, 6]; radians, any finite value, from
-            +X towards +Y. The fitted domain. ``bands``: N in [1, file bands] (7 shipped).
+            Radians in [0, pi/2] (zenith to horizon); turbidity in [2.5, 6]; radians, any finite
+            value, from +X towards +Y. The fitted domain. ``bands``: N in [1, file bands] (7 shipped).
         gibbs
             The zonal sinc filter of Habel eq. (5), N = ``bands``, on the sky and the ground
             (never the sun). Default (None): on for radiance (it halves the ringing), off for
@@ -524,7 +524,7 @@ class SkySH:
         Parameters
         ----------
         sun_zenith, turbidity, sun_azimuth
-            As :meth:`coefficients` (radians in [0, pi/2]; [2.5, 6]; radians, any finite value).
+            As :meth:`coefficients` (radians in [0, pi/2]; turbidity in [2.5, 6]; radians, any finite value).
         colourspace
             colour-science RGB colourspace name; default the file's (linear sRGB).
 

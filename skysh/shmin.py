@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from skysh import sh
-from skysh._checks import as_float_array, check_flag
+from skysh._checks import as_float_array, check_coeffs, check_flag
 
 __all__ = ["FORM_MAP", "MAX_MIN_BANDS", "DIRECTIONS", "COVER_RADIUS", "SPLIT", "LEVELS", "VALUE_LEVELS",
            "sphere_quadratic", "exact_min", "tangent_frame"]
@@ -96,18 +96,6 @@ _CELL_BUDGET, _VALUE_BUDGET = 2_000, 20_000
 _POINT_BLOCK: int = 1 << 16
 """Cells kept per function beyond which refinement stops (the bound stays valid, looser):
 caps the cost of ring-shaped or flat minima (a lone light's irradiance)."""
-
-
-def check_coeffs(coeffs: ArrayLike, name: str = "coeffs", high: int = MAX_MIN_BANDS) -> tuple[NDArray, bool, int]:
-    """(..., K, C) float64 view, whether the input was (K,), and the band count in [1, high]."""
-    c = as_float_array(coeffs, name)
-    vector = c.ndim == 1
-    c = c[:, None] if vector else c
-    bands = math.isqrt(c.shape[-2]) if c.ndim >= 2 else 0
-    if c.ndim < 2 or not 1 <= bands <= high or bands * bands != c.shape[-2]:
-        raise ValueError(f"{name} must have shape (K,), (K, C) or (..., K, C) with K = N**2, N in [1, {high}], "
-                         f"got {c.shape}")
-    return c, vector, bands
 
 
 def normalised(f: NDArray) -> tuple[NDArray, NDArray, NDArray]:
@@ -310,7 +298,7 @@ def exact_min(coeffs: ArrayLike, return_dirs: bool = False) -> NDArray[np.float6
     |coefficient| to [1/2, 1)): exact to rounding. 4..7 bands: the sampling certificate
     (:data:`VALUE_LEVELS` levels); its gap to the value at the direction is its slack.
     """
-    c, vector, bands = check_coeffs(coeffs)
+    c, vector, bands = check_coeffs(coeffs, high=MAX_MIN_BANDS)
     return_dirs = check_flag(return_dirs, "return_dirs")
     t, e, _ = normalised(np.moveaxis(c, -2, -1))  # (..., C, K)
     if bands <= 3:

@@ -286,7 +286,7 @@ def _air_mass(ts: NDArray) -> NDArray:
 
 
 def angstrom_beta(turbidity: ArrayLike) -> NDArray[np.float64]:
-    """Angstrom's aerosol coefficient beta = 0.04608365822050 T - 0.04586025928522, T in [2.5, 6]."""
+    """Angstrom's aerosol coefficient beta = 0.04608365822050 T - 0.04586025928522, turbidity T in [2.5, 6]."""
     t = check_range(turbidity, "turbidity", *TURBIDITY_RANGE)
     return ANGSTROM_BETA_SLOPE * t + ANGSTROM_BETA_INTERCEPT
 

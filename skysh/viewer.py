@@ -277,6 +277,17 @@ def _error_rule() -> dict[str, list[float]]:
     return {"mu": (0.5 * (nodes + 1.0)).tolist(), "weights": (0.5 * weights).tolist(), "azimuths": ERROR_RULE_PHI}
 
 
+def _rgb_from_xyz(sky: SkySH) -> NDArray[np.float64]:
+    """The file's XYZ -> linear RGB matrix: the one its sun table records (colour-science's for the file's
+    colourspace, ``tests/test_sunlight.py``), so building the page needs no colour-science import; for a
+    file without a sun table, colour-science's."""
+    from skysh import preetham, sunlight
+
+    if "sun" in sky.table.tables:
+        return np.asarray(sunlight.SunLight(sky.table).rgb_from_xyz, dtype=np.float64)
+    return preetham.rgb_from_xyz_matrix(sky.colourspace)
+
+
 def page_config(sky: SkySH) -> dict[str, Any]:
     """
     Everything the page's scripts take from skysh, as JSON-ready data (embedded in ``index.html``).
@@ -298,7 +309,7 @@ def page_config(sky: SkySH) -> dict[str, Any]:
         "zenithX": preetham.ZENITH_X_MATRIX.tolist(),
         "zenithY": preetham.ZENITH_Y_MATRIX.tolist(),
         "zenithLuminance": zenith_luminance_form(),
-        "xyzToRgb": preetham.rgb_from_xyz_matrix(sky.colourspace).tolist(),
+        "xyzToRgb": _rgb_from_xyz(sky).tolist(),
         "shRecurrence": {"diag": recurrence.diag.tolist(), "a": recurrence.a.tolist(), "b": recurrence.b.tolist()},
         "lobe": sh.cosine_lobe(sky.bands).tolist(),
         "keyValue": render.KEY_VALUE,

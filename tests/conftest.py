@@ -18,16 +18,21 @@ Inputs
     :func:`unit`, :func:`random_unit_vectors`, :func:`fibonacci_sphere`, :func:`light`,
     :func:`random_functions`, :func:`sky_samples`.
 Measures and options
-    :func:`dc_relative_error`, :func:`old_pipeline`, :func:`canonical_json`, :func:`engine_cases`,
-    :func:`is_padded_identity`.
+    :func:`dc_relative_error`, :data:`PLAIN_DIP`, :func:`old_pipeline`, :func:`canonical_json`,
+    :func:`engine_cases`, :func:`is_padded_identity`.
 Running code
     :func:`load_script`, :func:`tools_on_path`, :func:`python_without_matplotlib`,
-    :func:`pythons_without_matplotlib`, :func:`run_concurrently`, :func:`environment_without_pythonpath`.
+    :func:`pythons_without_matplotlib`, :func:`run_concurrently`, :func:`environment_without_pythonpath`,
+    :class:`ToolRuns` (compilers and shader validators on generated text, each distinct run once),
+    :func:`glslang_job` (:data:`GLSLANG` on a fragment shader), :func:`prefetch_runs` (the GLSL ones validated
+    together).
 Order
     The ``late`` marker: a test so marked runs after the other tests of its module.
 Fixtures
-    :func:`sky` (the shipped :class:`skysh.SkySH`, loaded once per session), :func:`wheel` (the
-    package's wheel, built once per session from a clean copy of the tree).
+    :func:`sky` (the shipped :class:`skysh.SkySH`, loaded once per session), :func:`exported` (its
+    ``export_source`` texts, each made once; type :data:`Exported`), :func:`tool_runs` (the session's
+    :class:`ToolRuns`; :func:`selected_names` tells a module's prefetch what its selected tests are),
+    :func:`wheel` (the package's wheel, built once per session from a clean copy of the tree).
 
 Tolerances stay in the test files, next to what they bound: their size follows from
 what each test compares (see each file's constants).
@@ -35,6 +40,8 @@ what each test compares (see each file's constants).
 
 from __future__ import annotations
 
+import functools
+import hashlib
 import importlib.util
 import inspect
 import json
@@ -43,7 +50,11 @@ import os
 import shutil
 import subprocess
 import sys
+import threading
 import types
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -282,6 +293,14 @@ def dc_relative_error(got: np.ndarray, ref: np.ndarray) -> float:
     return float((np.abs(got - ref).max(axis=-2) / np.abs(ref[..., 0, :])).max())
 
 
+PLAIN_DIP: float = -1e-3
+"""Negative control of the exports' non-negativity checks (tests/test_export*.py): the un-deringed old pipeline's
+irradiance, minimum over the sphere divided by its mean (test_export, test_export_js) or by its DC coefficient
+(test_export_lights: 2 sqrt(pi) times the mean, so a deeper dip), must fall below this for the check to be able
+to fail. Its size is the irradiance table's own margin (1e-3 of the mean) with the sign flipped: a dip that deep
+is a real ring, not rounding (each use states the dip it measured)."""
+
+
 def old_pipeline(sky: SkySH) -> dict[str, bool]:
     """Options giving the runtime's filtered and deringed sky (which the exports carry):
     ``irradiance_table=False`` where the runtime has the certified irradiance table's option
@@ -377,6 +396,184 @@ def run_concurrently(commands: dict[str, list[str]], **popen: Any) -> dict[str, 
     return done
 
 
+TOOL_JOBS: int = max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1)
+"""Tool runs :class:`ToolRuns` works ahead at the same time: one per core this process may use."""
+
+TOOL_TIMEOUT_S: float = 300.0
+"""Hang guard of one tool run (a compile or a validation takes well under a second normally)."""
+
+RUN_DIR: str = "{dir}"
+"""Placeholder in a :class:`ToolRuns` command for the run's own directory (where its files are written)."""
+
+
+ToolJob = tuple[list[str], dict[str, str]]
+"""A run for :class:`ToolRuns`: (argv with :data:`RUN_DIR` for its directory, files written there first)."""
+
+
+GLSLANG: str | None = shutil.which("glslangValidator")
+"""The Khronos reference shader compiler (Debian's ``glslang-tools``), or None: shader tests skip without it."""
+
+def glslang_job(shader: str, language: str) -> ToolJob:
+    """glslangValidator on a complete fragment shader: GLSL validated (its version is in its text), HLSL compiled to
+    SPIR-V (entry point ``main``; glslang takes HLSL only with SPIR-V generation)."""
+    assert GLSLANG is not None
+    if language == "glsl":
+        return [GLSLANG, f"{RUN_DIR}/sky.frag"], {"sky.frag": shader}
+    return ([GLSLANG, "-D", "-V", "-e", "main", "-S", "frag", "-o", f"{RUN_DIR}/sky.spv", f"{RUN_DIR}/sky.hlsl"],
+            {"sky.hlsl": shader})
+
+
+def prefetch_runs(runs: ToolRuns, jobs: Iterable[ToolJob]) -> None:
+    """Queue ``jobs`` on ``runs`` as they come, except the GLSL validations of :func:`glslang_job`: those go together
+    at the end, in one glslangValidator run over all their files (each file its own compilation unit, as glslang
+    links only with -l or -V; the run fails if any file does, and then each runs alone: see
+    :meth:`ToolRuns.prefetch_together`). HLSL compiles (-V links the files given together) go one by one."""
+    glsl: list[ToolJob] = []
+
+    def others() -> Iterator[ToolJob]:
+        for job in jobs:
+            if list(job[1]) == ["sky.frag"]:
+                glsl.append(job)
+            else:
+                yield job
+
+    runs.prefetch(others())
+    if glsl and GLSLANG is not None:
+        names = [f"s{k}.frag" for k in range(len(glsl))]
+        batch = ([GLSLANG, *(f"{RUN_DIR}/{name}" for name in names)],
+                 {name: files["sky.frag"] for name, (_, files) in zip(names, glsl)})
+        runs.prefetch_together(batch, glsl)
+
+
+@dataclass(frozen=True)
+class ToolRun:
+    """One finished tool run: its ``directory`` (the files written, and what the tool made) and its ``result``."""
+
+    directory: Path
+    result: subprocess.CompletedProcess
+
+
+class ToolRuns:
+    """Compilers and shader validators run on generated text, each distinct run once.
+
+    A run is a command (``argv``, in which :data:`RUN_DIR` stands for the run's directory) and the files written
+    there first (name -> text); its key is the sha256 of both, so identical builds (the same flags, header and
+    harness) are made once and every test asking for them gets the same :class:`ToolRun`. :meth:`prefetch` queues
+    runs on :data:`TOOL_JOBS` background threads (a module's compiles overlap each other and its Python work);
+    :meth:`run` waits for a run already going, and does a queued or unknown run at once in the calling thread.
+    ``eager`` False makes :meth:`prefetch` do nothing (pytest-xdist sharing a module between processes: each
+    process then runs only what its own tests ask for). Every directory is under ``base`` (the session's
+    ``tmp_path_factory`` in the :func:`tool_runs` fixture: one per process, so xdist workers never share one).
+    """
+
+    def __init__(self, base: Path, eager: bool = True, jobs: int = TOOL_JOBS) -> None:
+        self.base, self.eager = base, eager
+        self._pool = ThreadPoolExecutor(max_workers=jobs, thread_name_prefix="tool-run")
+        self._futures: dict[str, Future[ToolRun]] = {}
+        self._lock = threading.Lock()
+
+    @staticmethod
+    def key(argv: Sequence[str], files: Mapping[str, str]) -> str:
+        """The sha256 (hex) of a run's command and files."""
+        return hashlib.sha256(json.dumps([list(argv), sorted(files.items())]).encode()).hexdigest()
+
+    def _execute(self, key: str, argv: Sequence[str], files: Mapping[str, str]) -> ToolRun:
+        directory = self.base / key[:24]
+        directory.mkdir(parents=True, exist_ok=True)
+        for name, text in files.items():
+            (directory / name).write_text(text)
+        command = [arg.replace(RUN_DIR, str(directory)) for arg in argv]
+        result = subprocess.run(command, capture_output=True, text=True, timeout=TOOL_TIMEOUT_S, check=False)
+        return ToolRun(directory, result)
+
+    def prefetch(self, runs: Iterable[tuple[Sequence[str], Mapping[str, str]]]) -> None:
+        """Queue ``runs`` (argv, files) in the background, in order, unless known or not ``eager``; each is queued as
+        soon as ``runs`` yields it (a generator's first runs start while it makes the next)."""
+        if not self.eager:
+            return
+        for argv, files in runs:
+            key = self.key(argv, files)
+            with self._lock:
+                if key not in self._futures:
+                    self._futures[key] = self._pool.submit(self._execute, key, tuple(argv), dict(files))
+
+    def run(self, argv: Sequence[str], files: Mapping[str, str]) -> ToolRun:
+        """The run of ``argv`` on ``files``: done once (here and now unless it is already running or done)."""
+        key = self.key(argv, files)
+        with self._lock:
+            future = self._futures.get(key)
+            mine = future is None or future.cancel()  # unknown, or queued and taken back: run it in this thread
+            if mine:
+                future = self._futures[key] = Future()
+                future.set_running_or_notify_cancel()
+        assert future is not None
+        if mine:
+            try:
+                future.set_result(self._execute(key, argv, files))
+            except BaseException as error:
+                future.set_exception(error)
+        return future.result()
+
+    def prefetch_together(self, batch: ToolJob, members: Sequence[ToolJob]) -> None:
+        """Queue ``batch``: one run doing the work of every run of ``members`` at once and failing if any of them
+        would (glslangValidator on several GLSL files). If it succeeds, each member's run counts as succeeded with the
+        batch's output; if not, each member runs on its own, so that a failure is told by its own run. Nothing unless
+        ``eager``; members already known are left as they are."""
+        if not self.eager:
+            return
+        waiting: list[tuple[str, ToolJob, Future[ToolRun]]] = []
+        with self._lock:
+            for argv, files in members:
+                key = self.key(argv, files)
+                if key not in self._futures:
+                    future: Future[ToolRun] = Future()
+                    future.set_running_or_notify_cancel()  # run() waits for it instead of taking it back
+                    self._futures[key] = future
+                    waiting.append((key, (argv, files), future))
+            if not waiting:
+                return
+            batch_future = self._pool.submit(self._execute, self.key(*batch), *batch)
+        batch_future.add_done_callback(functools.partial(self._settle, waiting))
+
+    def _settle(self, waiting: list[tuple[str, ToolJob, Future[ToolRun]]], batch_future: Future[ToolRun]) -> None:
+        """The members of a finished batch: its success shared, else each run on its own (in the background)."""
+        done = None if batch_future.cancelled() or batch_future.exception() else batch_future.result()
+        for key, (argv, files), future in waiting:
+            if done is not None and done.result.returncode == 0:
+                future.set_result(ToolRun(done.directory, subprocess.CompletedProcess(
+                    argv, 0, done.result.stdout, done.result.stderr)))
+                continue
+            try:
+                alone = self._pool.submit(self._execute, key, argv, files)
+            except RuntimeError as error:  # the session is ending (the pool shut down)
+                future.set_exception(error)
+                continue
+            alone.add_done_callback(functools.partial(self._copy, future))
+
+    @staticmethod
+    def _copy(future: Future[ToolRun], source: Future[ToolRun]) -> None:
+        if source.cancelled() or source.exception() is not None:
+            future.set_exception(source.exception() if not source.cancelled() else RuntimeError("run cancelled"))
+        else:
+            future.set_result(source.result())
+
+    def close(self) -> None:
+        """Drop the queued runs and wait for those running."""
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_configure_node(node: Any) -> None:
+    """pytest-xdist (controller side): pass the distribution mode on to each worker, whose own options say "no"."""
+    node.workerinput["skysh_dist"] = node.config.getoption("dist", "no")
+
+
+def modules_stay_whole(config: pytest.Config) -> bool:
+    """True when every test of a module runs in this process: no pytest-xdist, or ``--dist loadfile``."""
+    workerinput = getattr(config, "workerinput", None)
+    return workerinput is None or workerinput.get("skysh_dist") == "loadfile"
+
+
 # --------------------------------------------------------------------------- #
 # Order
 # --------------------------------------------------------------------------- #
@@ -409,6 +606,36 @@ def sky() -> SkySH:
     from skysh.runtime import SkySH
 
     return SkySH.load()
+
+
+Exported = Callable[..., str]
+"""The type of the :func:`exported` fixture: ``exported(language, **options)`` -> the export's text."""
+
+
+def selected_names(request: pytest.FixtureRequest) -> set[str]:
+    """The names (function, without parameters, and class) of the selected tests of ``request``'s module: what a
+    module's prefetch fixture queues the runs of."""
+    items = [item for item in request.session.items if getattr(item, "module", None) is request.module]
+    return ({getattr(item, "originalname", item.name) for item in items}
+            | {cls.__name__ for cls in (getattr(item, "cls", None) for item in items) if cls is not None})
+
+
+@pytest.fixture(scope="session")
+def exported(sky: SkySH) -> Exported:
+    """``export_source(sky, language, **options)`` of the session's :func:`sky`, each distinct call made once (the
+    texts are immutable; a test of ``export_source`` itself calls it directly)."""
+    from skysh.export import export_source
+
+    return functools.lru_cache(maxsize=None)(functools.partial(export_source, sky))
+
+
+@pytest.fixture(scope="session")
+def tool_runs(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Iterator[ToolRuns]:
+    """The session's :class:`ToolRuns`, in its own temporary folder; eager when modules stay whole
+    (:func:`modules_stay_whole`)."""
+    runs = ToolRuns(tmp_path_factory.mktemp("tool_runs"), eager=modules_stay_whole(request.config))
+    yield runs
+    runs.close()
 
 
 def environment_without_pythonpath() -> dict[str, str]:

@@ -4,22 +4,29 @@ runtime's, degrees are converted, refusals are one line with status 2.
 
 Most tests call :func:`skysh.cli.main` in-process (fast); a few run the real
 ``python -m skysh`` in a subprocess to see the exit status and that no
-traceback escapes.
+traceback escapes. Those subprocesses (:data:`COMMANDS`, the quiet-without-matplotlib
+programs and the ``skysh view`` server) all start in the background when the module
+begins (test_startup.Prefetched); the tests that wait for them are marked ``late``, so the
+in-process tests overlap them.
 """
 
 from __future__ import annotations
 
 import csv
+import functools
 import io
 import json
 import math
 import re
 import subprocess
 import sys
+from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
+from test_startup import Prefetched, prefetched, server_session, start_early
 
 from skysh import SkySH, cli, sh, sun
 
@@ -33,6 +40,69 @@ SUN = ["--sun-zenith", "30", "--sun-azimuth", "45", "--turbidity", "3"]
 """A sun in the middle of the domain (degrees)."""
 
 VIENNA = ["--lat", "48.21", "--lon", "16.37", "--time", "2024-06-21T13:00:00+02:00"]
+
+SUBPROCESS_TIMEOUT_S: float = 180.0
+"""Hang guard of each subprocess (imports, loading the coefficient file and colour-science on a shared machine)."""
+
+TIMES_BEYOND: list[str] = ["0001-01-01T00:00:00+05:00", "9999-12-31T23:59:59-14:00"]
+"""Times whose UTC lies outside datetime's range (years 1 to 9999)."""
+
+COMMANDS: dict[str, list[str]] = {
+    "turbidity 9": ["coeffs", "--sun-zenith", "30", "--turbidity", "9"],
+    "version": ["--version"],
+    **{f"time {when}": ["coeffs", "--lat", "0", "--lon", "0", "--time", when, "--turbidity", "3"] for when in TIMES_BEYOND},
+}
+"""``python -m skysh`` command lines run as real commands, by name."""
+
+NO_MATPLOTLIB = "import sys; sys.modules['matplotlib'] = None  # a plain install: colour-science without matplotlib\n"
+"""Prefix of a subprocess script that makes ``import matplotlib`` fail, as on a fresh machine."""
+
+QUIET_COMMANDS: dict[str, list[str]] = {
+    "coeffs --colourspace": ["coeffs", *SUN, "--colourspace", "ACEScg"],
+    "render": ["render", *SUN, "--width", "16", "--out", "OUT"],
+}
+"""Commands that import colour-science, run by TestQuietWithoutMatplotlib (OUT: a PNG in a temporary folder)."""
+
+
+def run_without_matplotlib(code: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-c", NO_MATPLOTLIB + code], capture_output=True, text=True, cwd=ROOT,
+                          timeout=SUBPROCESS_TIMEOUT_S, check=False)
+
+
+def run_skysh(argv: list[str]) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "skysh", *argv], capture_output=True, text=True, cwd=ROOT,
+                          timeout=SUBPROCESS_TIMEOUT_S, check=False)
+
+
+@pytest.fixture(scope="module")
+def commands(request: pytest.FixtureRequest) -> Iterator[Prefetched[subprocess.CompletedProcess]]:
+    """Every command of :data:`COMMANDS`, as a real ``python -m skysh``, in the background from the module's start."""
+    yield from prefetched(request, {name: functools.partial(run_skysh, argv) for name, argv in COMMANDS.items()})
+
+
+@pytest.fixture(scope="module")
+def quiet_runs(request: pytest.FixtureRequest,
+               tmp_path_factory: pytest.TempPathFactory) -> Iterator[Prefetched[subprocess.CompletedProcess]]:
+    """The programs of TestQuietWithoutMatplotlib (``shim``: colour-science alone; each of :data:`QUIET_COMMANDS`,
+    its PNG in a temporary folder), in the background from the module's start (each mostly imports colour-science)."""
+    png = str(tmp_path_factory.mktemp("quiet") / "sky.png")
+    jobs = {"shim": functools.partial(run_without_matplotlib, "import colour")}
+    for name, argv in QUIET_COMMANDS.items():
+        argv = [png if a == "OUT" else a for a in argv]
+        jobs[name] = functools.partial(run_without_matplotlib, f"from skysh import cli; raise SystemExit(cli.main({argv!r}))")
+    yield from prefetched(request, jobs)
+
+
+@pytest.fixture(scope="module")
+def view_run(request: pytest.FixtureRequest) -> Iterator[Prefetched[dict[str, Any]]]:
+    """``python -m skysh view --port 0`` (test_startup.server_session), in the background from the module's start."""
+    argv = [sys.executable, "-m", "skysh", "view", "--port", "0"]
+    yield from prefetched(request, {"view": functools.partial(server_session, argv)})
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _start_early(request: pytest.FixtureRequest) -> None:
+    start_early(request, "commands", "quiet_runs", "view_run")
 
 
 @pytest.fixture(scope="module")
@@ -205,11 +275,9 @@ class TestRefusals:
         code, _, err = run(["export", "--format", "c", "--out", str(tmp_path / "missing" / "sky.h")], capsys)
         assert code == 2 and err.startswith("skysh: error: ") and err.count("\n") == 1
 
-    def test_no_traceback_from_the_real_command(self) -> None:
-        result = subprocess.run(
-            [sys.executable, "-m", "skysh", "coeffs", "--sun-zenith", "30", "--turbidity", "9"],
-            capture_output=True, text=True, cwd=ROOT,
-        )
+    @pytest.mark.late
+    def test_no_traceback_from_the_real_command(self, commands: Prefetched[subprocess.CompletedProcess]) -> None:
+        result = commands.result("turbidity 9")
         assert result.returncode == 2 and result.stdout == ""
         assert result.stderr == "skysh: error: --turbidity must lie in [2.5, 6] (the fitted domain), got 9\n"
 
@@ -234,8 +302,9 @@ class TestHelp:
         for needle in needles:
             assert needle in text, needle
 
-    def test_python_m_skysh(self) -> None:
-        result = subprocess.run([sys.executable, "-m", "skysh", "--version"], capture_output=True, text=True, cwd=ROOT)
+    @pytest.mark.late
+    def test_python_m_skysh(self, commands: Prefetched[subprocess.CompletedProcess]) -> None:
+        result = commands.result("version")
         assert result.returncode == 0 and result.stdout.startswith("skysh 0.")
 
 
@@ -270,14 +339,6 @@ class TestTools:
 # --------------------------------------------------------------------------- #
 # What a new user meets (issue 13): labels that say one true thing, no noise
 # --------------------------------------------------------------------------- #
-NO_MATPLOTLIB = "import sys; sys.modules['matplotlib'] = None  # a plain install: colour-science without matplotlib\n"
-"""Prefix of a subprocess script that makes ``import matplotlib`` fail, as on a fresh machine."""
-
-
-def run_without_matplotlib(code: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-c", NO_MATPLOTLIB + code], capture_output=True, text=True, cwd=ROOT)
-
-
 class TestLabels:
     def test_y_up_header_describes_the_y_up_frame(self, capsys: pytest.CaptureFixture) -> None:
         _, out, _ = run(["coeffs", *SUN, "--up", "y"], capsys)
@@ -336,12 +397,11 @@ class TestLabels:
         payload = coeffs_json([*SUN, "--exposure", factor], capsys)
         assert np.all(np.isfinite(payload["coefficients"]))
 
-    @pytest.mark.parametrize("when", ["0001-01-01T00:00:00+05:00", "9999-12-31T23:59:59-14:00"])
-    def test_time_beyond_the_datetime_range_is_one_line(self, when: str) -> None:
-        result = subprocess.run(
-            [sys.executable, "-m", "skysh", "coeffs", "--lat", "0", "--lon", "0", "--time", when, "--turbidity", "3"],
-            capture_output=True, text=True, cwd=ROOT,
-        )
+    @pytest.mark.late
+    @pytest.mark.parametrize("when", TIMES_BEYOND)
+    def test_time_beyond_the_datetime_range_is_one_line(self, when: str,
+                                                        commands: Prefetched[subprocess.CompletedProcess]) -> None:
+        result = commands.result(f"time {when}")
         assert result.returncode == 2 and result.stdout == "" and "Traceback" not in result.stderr
         assert result.stderr.startswith("skysh: error: --time must lie in") and result.stderr.count("\n") == 1
 
@@ -361,25 +421,18 @@ class TestLabels:
         assert code == 2 and err.startswith("skysh: error: --out /nonexistent-dir/sky.png: ") and err.count("\n") == 1
 
 
+@pytest.mark.late
 class TestQuietWithoutMatplotlib:
     """colour-science warns on import when matplotlib is missing; skysh's commands stay quiet."""
 
-    def test_the_shim_makes_colour_science_warn(self) -> None:
+    def test_the_shim_makes_colour_science_warn(self, quiet_runs: Prefetched[subprocess.CompletedProcess]) -> None:
         """Negative control: without skysh's filter the warning is there, so the tests below can see it."""
-        result = run_without_matplotlib("import colour")
+        result = quiet_runs.result("shim")
         assert "Matplotlib" in result.stderr and "not available" in result.stderr
 
-    @pytest.mark.parametrize(
-        "argv",
-        [
-            ["coeffs", *SUN, "--colourspace", "ACEScg"],
-            ["render", *SUN, "--width", "16", "--out", "OUT"],
-        ],
-        ids=["coeffs --colourspace", "render"],
-    )
-    def test_commands(self, argv: list[str], tmp_path: Path) -> None:
-        argv = [str(tmp_path / "sky.png") if a == "OUT" else a for a in argv]
-        result = run_without_matplotlib(f"from skysh import cli; raise SystemExit(cli.main({argv!r}))")
+    @pytest.mark.parametrize("name", list(QUIET_COMMANDS))
+    def test_commands(self, name: str, quiet_runs: Prefetched[subprocess.CompletedProcess]) -> None:
+        result = quiet_runs.result(name)
         assert result.returncode == 0 and result.stderr == "", result.stderr
 
 
@@ -495,22 +548,9 @@ class TestView:
         status, _, err = run(["view", "--out", str(tmp_path), "--port", "8000"], capsys)
         assert status == cli.EXIT_USAGE and "--port" in err and err.count("\n") == 1
 
-    def test_serves_on_loopback_and_stops_on_ctrl_c(self) -> None:
-        import signal
-        import urllib.request
-
-        process = subprocess.Popen(
-            [sys.executable, "-m", "skysh", "view", "--port", "0"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-            text=True, cwd=ROOT,
-        )
-        try:
-            line = process.stdout.readline() if process.stdout else ""
-            address = re.search(r"http://127\.0\.0\.1:\d+/", line)
-            assert address, line
-            with urllib.request.urlopen(address.group(0), timeout=30) as response:
-                assert response.status == 200 and b"<html" in response.read().lower()
-            process.send_signal(signal.SIGINT)
-            assert process.wait(timeout=30) == 0
-        finally:
-            if process.poll() is None:
-                process.kill()
+    @pytest.mark.late
+    def test_serves_on_loopback_and_stops_on_ctrl_c(self, view_run: Prefetched[dict[str, Any]]) -> None:
+        session = view_run.result("view")
+        assert re.search(r"http://127\.0\.0\.1:\d+/", session["line"]), session["line"]
+        assert session["status"] == 200 and b"<html" in session["body"].lower()
+        assert session["code"] == 0, session["err"]

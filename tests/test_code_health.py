@@ -21,18 +21,31 @@ The package, the tools and ``benchmarks/`` are also held to the "no reach-ins" r
     (``SkySH._x``); dunders (``__name__``) are public;
 -   no ``obj._name`` for the instance privates other modules are known to have been read
     through: :data:`KNOWN_INSTANCE_PRIVATES` (issue 14's list), and every ``self._name`` a class
-    of another ``skysh`` module assigns (:func:`instance_privates`), unless the file defines
-    that name for its own objects. An instance's type cannot be known without running the
-    code, so this is a name-level check; a reach-in under a fresh name would pass it.
+    of another ``skysh`` module assigns or private method it defines (``def _one(self, ...)``:
+    :func:`instance_privates`), unless the file defines that name for its own objects. An
+    instance's type cannot be known without running the code, so this is a name-level check; a
+    reach-in under a fresh name would pass it.
+
+One source for every fact: the turbidity and sun-zenith domains are constants of the modules
+that own them (:func:`prose_domains`); where prose repeats them (numpy-style docstrings state
+the valid range; comments; help and message texts) every interval ``[a, b]`` written next to the
+word *turbidity*, or next to *zenith* in radians (an end in pi) or degrees (``deg`` beside
+it), must equal one of those constants (:func:`prose_ranges`). Intervals whose ends are not
+numbers (``[{low:g}, {high:g}]``, ``$turbidity_domain``) are derived from the constants in code.
 
 Every violation is listed in the failure message as ``path:line: what (measured > limit)``.
-The negative controls feed small synthetic sources to the same checkers.
+The negative controls feed small synthetic sources to the same checkers. The checked files are
+parsed, never imported; the domains are read from the modules that own them.
 """
 
 from __future__ import annotations
 
 import ast
+import io
+import math
+import re
 import textwrap
+import tokenize
 from collections.abc import Iterable, Iterator
 from functools import cache
 from pathlib import Path
@@ -203,9 +216,13 @@ def _dotted(node: ast.expr, bound: dict[str, str]) -> str | None:
 
 
 def _self_privates(tree: ast.AST) -> set[str]:
-    """Private attribute names a module's classes give their instances (``self._x = ...``, ``__slots__``)."""
+    """Private attribute names a module's classes give their instances (``self._x = ...``, ``__slots__``,
+    private methods ``def _x(self, ...)``)."""
     names = set()
     for node in ast.walk(tree):
+        if isinstance(node, ast.ClassDef):
+            names |= {item.name for item in node.body
+                      if isinstance(item, (ast.FunctionDef, ast.AsyncFunctionDef)) and _is_private(item.name)}
         if isinstance(node, ast.Attribute) and isinstance(node.ctx, ast.Store) and _is_private(node.attr) \
                 and isinstance(node.value, ast.Name) and node.value.id in ("self", "cls"):
             names.add(node.attr)
@@ -217,7 +234,7 @@ def _self_privates(tree: ast.AST) -> set[str]:
 
 @cache
 def instance_privates() -> dict[str, str]:
-    """Every instance-private name a ``skysh`` class assigns, with the module that owns it."""
+    """Every instance-private name a ``skysh`` class assigns or defines as a method, with the module that owns it."""
     owners: dict[str, str] = {}
     for path in python_files(("skysh",)):
         for name in _self_privates(ast.parse(path.read_text(encoding="utf-8"))):
@@ -251,6 +268,94 @@ def reach_ins(path: str, tree: ast.AST, own: str, is_package: bool = False,
                 origin = _dotted(node.args[0], bound)
                 if origin is not None:
                     found.append(Violation(path, node.lineno, f"{verb}({origin}, {name.value!r}): private of another module"))
+    return found
+
+
+# --------------------------------------------------------------------------- #
+# Facts written as prose
+# --------------------------------------------------------------------------- #
+_INTERVAL: str = r"\[\s*(?P<low>[^\[\],\n]{1,24}?)\s*,\s*(?P<high>[^\[\],\n]{1,24}?)\s*\]"
+TURBIDITY_PROSE: re.Pattern[str] = re.compile(r"\bturbidit(?:y|ies)\b(?=(?P<gap>[^\[\]]{0,50}?)" + _INTERVAL + ")", re.I)
+"""The first interval within 50 characters after the word turbidity (across a docstring's line break);
+a lookahead, so every occurrence of the word is tried, also one inside another's gap."""
+ZENITH_PROSE: re.Pattern[str] = re.compile(
+    r"(?<![a-z])zenith\b(?=(?P<gap>[^\[\]]{0,50}?)" + _INTERVAL + r"(?P<after>[^\[\]\n]{0,12}))", re.I)
+"""The first interval within 50 characters after the word zenith (also in ``sun_zenith``), and what
+follows it on its line (a lookahead, as :data:`TURBIDITY_PROSE`)."""
+NOT_TURBIDITY: re.Pattern[str] = re.compile(r"zenith|azimuth|albedo|radian|interval|variable|->", re.I)
+"""Words between *turbidity* and an interval that make it another quantity's (``sun_zenith, turbidity,
+albedo: Radians in [0, pi/2]``, ``(sun zenith, turbidity) -> (x, y) in [-1, 1]``, ``the table's
+variables x, y in [-1, 1]``)."""
+NOT_ZENITH: re.Pattern[str] = re.compile(r"turbidity|azimuth|albedo|cos|variable|->", re.I)
+"""Likewise for *zenith* (``zenith ... azimuth [0, pi]``, ``cosine of the zenith angle, [0, 1]``)."""
+
+
+def prose_domains() -> dict[str, dict[tuple[float, float], str]]:
+    """The domains prose may state, by quantity: each from the constant that owns it."""
+    from skysh import hosek, poly, preetham
+
+    zenith = {poly.SUN_ZENITH_DOMAIN: "skysh.poly.SUN_ZENITH_DOMAIN (also preetham's and hosek's SUN_ZENITH_RANGE)",
+              (0.0, math.pi): "a zenith angle's whole range (skysh.sun: the sun may be below the horizon)"}
+    return {
+        "turbidity": {poly.TURBIDITY_DOMAIN: "skysh.poly.TURBIDITY_DOMAIN (the fitted domain)",
+                      preetham.TURBIDITY_RANGE: "skysh.preetham.TURBIDITY_RANGE (Preetham's model)",
+                      hosek.TURBIDITY_RANGE: "skysh.hosek.TURBIDITY_RANGE (Hosek-Wilkie's model)"},
+        "zenith": zenith,
+        "zenith in degrees": {(math.degrees(a), math.degrees(b)): f"{why}, in degrees" for (a, b), why in zenith.items()},
+    }
+
+
+def _end_value(text: str) -> float | None:
+    """An interval's end: a number, or a multiple of pi (``pi/2``, ``3 pi/4``, ``pi / 2``); None for a name."""
+    compact = text.replace(" ", "")
+    multiple = re.fullmatch(r"(-?)(\d*)pi(?:/(\d+))?", compact)
+    if multiple:
+        return (-1.0 if multiple[1] else 1.0) * int(multiple[2] or 1) * math.pi / int(multiple[3] or 1)
+    try:
+        return float(compact)
+    except ValueError:
+        return None
+
+
+def _prose(source: str) -> Iterator[tuple[str, int]]:
+    """Every string literal and comment of ``source`` with its first line."""
+    kinds = {tokenize.STRING, tokenize.COMMENT} | ({tokenize.FSTRING_MIDDLE} if hasattr(tokenize, "FSTRING_MIDDLE") else set())
+    for token in tokenize.generate_tokens(io.StringIO(source).readline):
+        if token.type in kinds:
+            yield token.string, token.start[0]
+
+
+def _stated(match: re.Match[str], quantity: str, domains: dict[str, dict[tuple[float, float], str]]) -> str | None:
+    """What is wrong with one stated interval, or None (right, or not a statement of ``quantity``'s domain)."""
+    low, high = _end_value(match["low"]), _end_value(match["high"])
+    if low is None or high is None:  # a name or a placeholder: derived in code
+        return None
+    if quantity == "turbidity":
+        if NOT_TURBIDITY.search(match["gap"]) or "pi" in match["low"] + match["high"]:
+            return None
+    else:
+        in_pi = "pi" in match["low"] + match["high"]
+        in_degrees = "deg" in (match["gap"] + match["after"]).lower()
+        if NOT_ZENITH.search(match["gap"]) or not (in_pi or in_degrees):
+            return None
+        quantity = "zenith" if in_pi else "zenith in degrees"
+    known = domains[quantity]
+    if any(abs(low - a) <= 1e-12 * max(1.0, abs(a)) and abs(high - b) <= 1e-12 * max(1.0, abs(b)) for a, b in known):
+        return None
+    return (f"{quantity} [{match['low']}, {match['high']}] is none of: "
+            + "; ".join(f"[{a:g}, {b:g}] {why}" for (a, b), why in known.items()))
+
+
+def prose_ranges(path: str, source: str, domains: dict[str, dict[tuple[float, float], str]] | None = None) -> list[Violation]:
+    """Every turbidity or sun-zenith interval written in a string or comment of ``source`` that is no known domain."""
+    domains = prose_domains() if domains is None else domains
+    found = []
+    for text, line in _prose(source):
+        for quantity, pattern in (("turbidity", TURBIDITY_PROSE), ("zenith", ZENITH_PROSE)):
+            for match in pattern.finditer(text):
+                wrong = _stated(match, quantity, domains)
+                if wrong is not None:
+                    found.append(Violation(path, line + text.count("\n", 0, match.start("low")), wrong))
     return found
 
 
@@ -297,6 +402,29 @@ def test_no_reach_ins():
     found = [v for p in python_files(PRIVACY_SCOPE)
              for v in reach_ins(_rel(p), _parsed(p)[1], module_name(p), p.name == "__init__.py")]
     _check(found, "private reach-in")
+
+
+def test_prose_domains_match_their_source():
+    found = [v for p in python_files(SIZE_SCOPE) for v in prose_ranges(_rel(p), _parsed(p)[0])]
+    _check(found, "domain written as prose")
+
+
+def test_prose_scan_finds_the_written_domains():
+    """The scan sees the ranges the docstrings state (else a pattern that matches nothing would pass)."""
+    seen = {quantity: 0 for quantity in ("turbidity", "zenith")}
+    for p in python_files(SIZE_SCOPE):
+        for text, _ in _prose(_parsed(p)[0]):
+            seen["turbidity"] += sum(_end_value(m["low"]) == 2.5 for m in TURBIDITY_PROSE.finditer(text))
+            seen["zenith"] += sum("pi/2" in m["high"] for m in ZENITH_PROSE.finditer(text))
+    assert seen["turbidity"] >= 5 and seen["zenith"] >= 5, seen
+
+
+def test_startup_copies_match_their_source():
+    """Values :mod:`skysh.cli` repeats so that building its parser imports nothing equal their source."""
+    from skysh import cli, render
+
+    assert cli.RENDER_WIDTH_RANGE == render.PANEL_WIDTH_RANGE
+    assert cli.DEFAULT_RENDER_WIDTH == render.DEFAULT_PANEL_WIDTH
 
 
 # --------------------------------------------------------------------------- #
@@ -367,7 +495,52 @@ def test_negative_control_reach_ins():
     assert reach_ins("m.py", ast.parse(own), "skysh.fit", modules=modules, instance_names={}) == []
 
 
+def test_negative_control_private_methods():
+    """A benchmark calling a skysh class's private methods (``sky._one``, ``plan._evaluate``) is flagged."""
+    library = ("class SkySH:\n    def _one(self, ts):\n        return ts\n    def coefficients(self, ts):\n"
+               "        return self._one(ts)\n"
+               "class LitPlan:\n    def _evaluate(self, ts):\n        return ts\n    def fused(self, ts):\n"
+               "        return self._evaluate(ts)\n")
+    assert _self_privates(ast.parse(library)) == {"_one", "_evaluate"}  # the methods, not the public ones
+    owners = {name: "skysh.runtime" for name in _self_privates(ast.parse(library))}
+    bench = ("from skysh.runtime import SkySH\nsky = SkySH.load()\nplan = sky.plan(3)\n"
+             "t = (sky._one(0.5), plan._evaluate(0.5), sky.coefficients(0.5))\n")
+    modules = frozenset({"skysh", "skysh.runtime", "bench_lights"})
+    found = reach_ins("bench.py", ast.parse(bench), "bench_lights", modules=modules, instance_names=owners)
+    assert sorted(v.what.split(":")[0] for v in found) == ["plan._evaluate", "sky._one"], found
+    # the module that defines them calls them freely, on itself and on its other objects
+    assert reach_ins("m.py", ast.parse(library + "def g(sky):\n    return sky._one(1)\n"), "skysh.runtime",
+                     modules=modules, instance_names=owners) == []
+
+
 @pytest.mark.parametrize("relative", ["from . import _x", "from .common import _y"])
 def test_negative_control_relative_imports(relative):
     modules = frozenset({"report", "report.common", "report.run"})
     assert reach_ins("m.py", ast.parse(relative), "report.run", modules=modules, instance_names={})
+
+
+PROSE_CASES: list[tuple[str, bool]] = [
+    ('"""Turbidity in [2.5, 7]."""', True),  # the issue's example: a typo of the fitted domain
+    ("# turbidity [2.5, 6], the fitted domain", False),
+    ('"""\n    turbidity\n        (n_t,) in [1.7, 10]."""', False),  # a numpy-style parameter, across a line
+    ('"""\n    turbidity\n        (n_t,) in [1.7, 11]."""', True),
+    ('"""sun zenith [0, pi/3] rad"""', True),
+    ('"""Radians: sun zenith [0, pi / 2], any azimuth."""', False),
+    ('"""\n    sun_zenith\n        Radians, [0, pi/2]."""', False),
+    ('"""\n    sun_zenith\n        Radians, [0, 3 pi/2]."""', True),
+    ('"""(sun_zenith, sun_azimuth) in radians: zenith in [0, pi/3], azimuth any."""', True),  # the 2nd zenith
+    ('help="sun zenith angle, degrees, [0, 95]"', True),
+    ('"""zenith [0, 90] deg x turbidity [2.5, 6]"""', False),
+    ('f"--turbidity must lie in [{low:g}, {high:g}], got {t}"', False),  # derived in code
+    ('"""Domain: turbidity $turbidity_domain."""', False),  # a template placeholder
+    ('"""sun_zenith, turbidity, albedo\n        Radians in [0, pi/2]; turbidity in [1, 10]."""', False),
+    ('"""Cosine of the view\'s zenith angle, [0, 1]."""', False),  # not an angle's range
+    ('"""(sun zenith, turbidity) of the table\'s variables x, y in [-1, 1]."""', False),
+]
+"""Synthetic sources and whether the prose check must flag them."""
+
+
+@pytest.mark.parametrize("source, flagged", PROSE_CASES)
+def test_negative_control_prose_ranges(source, flagged):
+    found = prose_ranges("m.py", source + "\n")
+    assert bool(found) == flagged, found

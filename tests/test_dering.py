@@ -12,8 +12,9 @@ non-negative by construction (sums of positive deltas, deltas along arcs, ambien
 
 One class per public function (plus the window table). Every tolerance is a named
 constant with its reason. No timing assertions (``benchmarks/bench_dering.py``).
-The property tests' budgets keep this file near 30 s on two loaded cores; the
-1e5-function run of the issue is marked ``slow``.
+The core run (``-m "not slow"``) checks smaller samples and property budgets; their
+``slow`` twins run the full ones (the same seeds), and the 1e5-function run of the issue
+is marked ``slow``.
 """
 
 from __future__ import annotations
@@ -95,6 +96,25 @@ DELTA_T_GRID: int = 200_001
 
 HYPOTHESIS = settings(max_examples=30, deadline=None, derandomize=True, database=None,
                       suppress_health_check=[HealthCheck.too_slow])  # a deterministic property-test budget
+"""The property tests' full budget (their ``slow`` twins)."""
+
+HYPOTHESIS_CORE = settings(HYPOTHESIS, max_examples=10)
+"""The core run's budget of the same properties: 10 seeds, each of several random lights (the twins run 30)."""
+
+SEEDS = st.integers(0, 2**32 - 1)
+
+RANDOM_3_BAND_FUNCTIONS: dict[str, int] = {"core": 2_500, "slow": 10_000}
+"""Random 3-band functions of :meth:`TestExactMin.test_three_bands_random` (seed 2) in the core run and in its
+``slow`` twin (the issue's 10^5 run is a third test)."""
+
+CERTIFIED_FUNCTIONS: dict[str, tuple[int, int]] = {"core": (30, 10), "slow": (60, 20)}
+"""(random functions, lights' irradiance) per band count 4..7 of :meth:`TestExactMin.test_four_to_seven_bands_certified`
+(seed 10 + bands) in the core run and in its ``slow`` twin: the certified search is the module's costliest path."""
+
+ADVERSARIAL_3_BAND_FUNCTIONS: dict[str, int] = {"core": 400, "slow": 800}
+"""Adversarial quadratics of :meth:`TestExactMin.test_three_bands_adversarial` (seed 4) in the core run and in its
+``slow`` twin: the four kinds (generic, repeated, near-repeated eigenvalues, zero g on the lowest eigenvector) take
+turns, so each has 100 in the core."""
 
 
 
@@ -271,7 +291,11 @@ class TestExactMin:
         assert np.all(vals >= ref - EXACT_RTOL * scale)
 
     def test_three_bands_random(self) -> None:
-        self._check_three(random_functions(np.random.default_rng(2), 10_000, 3))
+        self._check_three(random_functions(np.random.default_rng(2), RANDOM_3_BAND_FUNCTIONS["core"], 3))
+
+    @pytest.mark.slow
+    def test_three_bands_random_1e4(self) -> None:
+        self._check_three(random_functions(np.random.default_rng(2), RANDOM_3_BAND_FUNCTIONS["slow"], 3))
 
     @pytest.mark.slow
     def test_three_bands_random_1e5(self) -> None:
@@ -279,7 +303,11 @@ class TestExactMin:
         self._check_three(random_functions(np.random.default_rng(3), 100_000, 3))
 
     def test_three_bands_adversarial(self) -> None:
-        self._check_three(adversarial_quadratics(np.random.default_rng(4), 800), dense=3)
+        self._check_three(adversarial_quadratics(np.random.default_rng(4), ADVERSARIAL_3_BAND_FUNCTIONS["core"]), dense=3)
+
+    @pytest.mark.slow
+    def test_three_bands_adversarial_800(self) -> None:
+        self._check_three(adversarial_quadratics(np.random.default_rng(4), ADVERSARIAL_3_BAND_FUNCTIONS["slow"]), dense=3)
 
     @pytest.mark.parametrize("bands", [1, 2])
     def test_one_and_two_bands_closed_form(self, bands: int) -> None:
@@ -301,9 +329,18 @@ class TestExactMin:
 
     @pytest.mark.parametrize("bands", [4, 5, 6, 7])
     def test_four_to_seven_bands_certified(self, bands: int) -> None:
+        self._check_certified(bands, *CERTIFIED_FUNCTIONS["core"])
+
+    @pytest.mark.slow
+    @pytest.mark.parametrize("bands", [4, 5, 6, 7])
+    def test_four_to_seven_bands_certified_80(self, bands: int) -> None:
+        self._check_certified(bands, *CERTIFIED_FUNCTIONS["slow"])
+
+    @staticmethod
+    def _check_certified(bands: int, random: int, lights: int) -> None:
         rng = np.random.default_rng(10 + bands)
-        f = np.concatenate([random_functions(rng, 60, bands),
-                            np.moveaxis(sh.irradiance(np.stack([light(rng, bands, 1) for _ in range(20)])), -1, -2)[:, 0]])
+        f = np.concatenate([random_functions(rng, random, bands),
+                            np.moveaxis(sh.irradiance(np.stack([light(rng, bands, 1) for _ in range(lights)])), -1, -2)[:, 0]])
         vals, dirs = shmin.exact_min(f[..., None], return_dirs=True)
         vals, dirs = vals[:, 0], dirs[:, 0]
         ref = reference_min(f, dense=3)
@@ -351,37 +388,51 @@ class TestExactMin:
             dering.exact_min(np.ones(9), return_dirs=1)
 
 
+SEED_GRID: int = 20_001
+"""Points of :func:`seed_bound_reference`'s grid on each quarter circle of phi (spacing 7.9e-5 rad)."""
+
+TERNARY_STEPS: int = 100
+"""Ternary-search steps of :func:`seed_bound_reference` around the grid's least point: the bracket of two grid
+spacings shrinks by (2/3)^100, far below 1e-16 rad."""
+
+
 def seed_bound_reference(f: np.ndarray) -> np.ndarray:
-    """The seed's 1-D function minimised densely: rotate the optimal linear direction to +Z
+    """The seed's 1-D function minimised densely, for functions f (F, 9): rotate the optimal linear direction to +Z
     (sh.rotate, frame from a cross product), then min over z = cos(phi) of the zonal part
     (eq. 3) - T (1 - z^2) - S |z| sqrt(1 - z^2), T and S the |m| = 2 and |m| = 1 amplitudes
     (eqs. 4, 5). Smooth in phi on each quarter circle: a dense grid there, then ternary
-    search around its least point."""
+    search around its least point (all functions at once, each with its own bracket)."""
     k0, k1, kz = 0.5 / math.sqrt(math.pi), math.sqrt(3 / (4 * math.pi)), math.sqrt(5 / (16 * math.pi))
     kb, k2 = math.sqrt(15 / (4 * math.pi)), math.sqrt(15 / (16 * math.pi))
-    out = []
+    rotated = []
     for x in f:
         n = np.array([-x[3], -x[1], x[2]])
         n = unit(n) if np.linalg.norm(n) > 0 else np.array([0.0, 0.0, 1.0])
         e1 = tangents(n[None])[0][0]
-        r = sh.rotate(x, np.stack([e1, np.cross(n, e1), n], axis=1).T)  # coefficients of f(frame w)
+        rotated.append(sh.rotate(x, np.stack([e1, np.cross(n, e1), n], axis=1).T))  # coefficients of f(frame w)
+    r = np.array(rotated).reshape(-1, 9)
+    # per function: the weights of 1, z, 3 z^2 - 1, sin^2 and |z| sin
+    c0, c1, cz = k0 * r[:, :1], k1 * r[:, 2:3], kz * r[:, 6:7]
+    t, b = k2 * np.hypot(r[:, 4:5], r[:, 8:9]), kb * np.hypot(r[:, 5:6], r[:, 7:8])
 
-        def h(phi: np.ndarray, r: np.ndarray = r) -> np.ndarray:
-            z, s = np.cos(phi), np.sin(phi)
-            return (k0 * r[0] + k1 * r[2] * z + kz * r[6] * (3 * z * z - 1) - k2 * math.hypot(r[4], r[8]) * s * s
-                    - kb * math.hypot(r[5], r[7]) * np.abs(z) * s)
+    def h(phi: np.ndarray) -> np.ndarray:
+        z, s = np.cos(phi), np.sin(phi)
+        return c0 + c1 * z + cz * (3 * z * z - 1) - t * s * s - b * np.abs(z) * s
 
-        best = math.inf
-        for lo in (0.0, math.pi / 2):
-            phi = np.linspace(lo, lo + math.pi / 2, 20_001)
-            j = int(np.argmin(h(phi)))
-            a, b = phi[max(j - 1, 0)], phi[min(j + 1, len(phi) - 1)]
-            for _ in range(100):
-                m1, m2 = a + (b - a) / 3, b - (b - a) / 3
-                a, b = (a, m2) if h(np.array(m1)) < h(np.array(m2)) else (m1, b)
-            best = min(best, float(h(phi).min()), float(h(np.array(0.5 * (a + b)))))
-        out.append(best)
-    return np.array(out)
+    out = np.full(len(r), math.inf)
+    for lo in (0.0, math.pi / 2):
+        phi = np.linspace(lo, lo + math.pi / 2, SEED_GRID)
+        z, s = np.cos(phi), np.sin(phi)
+        grid = np.concatenate([c0, c1, cz, -t, -b], axis=1) @ np.stack([np.ones_like(z), z, 3 * z * z - 1, s * s,
+                                                                       np.abs(z) * s])
+        j = np.argmin(grid, axis=1)
+        a, b_ = phi[np.maximum(j - 1, 0)][:, None], phi[np.minimum(j + 1, SEED_GRID - 1)][:, None]
+        for _ in range(TERNARY_STEPS):
+            m1, m2 = a + (b_ - a) / 3, b_ - (b_ - a) / 3
+            left = h(m1) < h(m2)
+            a, b_ = np.where(left, a, m1), np.where(left, m2, b_)
+        out = np.minimum(out, np.minimum(grid[np.arange(len(r)), j], h(0.5 * (a + b_))[:, 0]))
+    return out
 
 
 class TestMinBound:
@@ -398,12 +449,22 @@ class TestMinBound:
         np.testing.assert_allclose(bound, seed_bound_reference(f), rtol=0, atol=SEED_RTOL * scale.max())
         assert np.all(bound <= reference_min(f) + ABOVE_RTOL * scale)
 
-    @HYPOTHESIS
-    @given(seed=st.integers(0, 2**32 - 1))
-    def test_never_above_for_lights(self, seed: int) -> None:
+    @staticmethod
+    def _never_above_for_lights(seed: int) -> None:
         rng = np.random.default_rng(seed)
         e = sh.irradiance(np.stack([light(rng, 3, 1) for _ in range(6)]))[..., 0]
         assert np.all(min_bound(e.T) <= reference_min(e) + ABOVE_RTOL * np.abs(e).max(axis=1))
+
+    @HYPOTHESIS_CORE
+    @given(seed=SEEDS)
+    def test_never_above_for_lights(self, seed: int) -> None:
+        self._never_above_for_lights(seed)
+
+    @pytest.mark.slow
+    @HYPOTHESIS
+    @given(seed=SEEDS)
+    def test_never_above_for_lights_full(self, seed: int) -> None:
+        self._never_above_for_lights(seed)
 
     def test_exact_for_zonal_functions(self) -> None:
         """Zonal about the linear direction: c0 Y00 + c2 K z + c6 K0 (3 z^2 - 1), minimum in closed form."""
@@ -490,9 +551,8 @@ class TestDering:
         brute, _ = least_row_brute_force(c)
         assert np.any(np.maximum(chosen - 1, 0) != brute)
 
-    @HYPOTHESIS
-    @given(seed=st.integers(0, 2**32 - 1), target=st.sampled_from(dering.DERING_TARGETS))
-    def test_random_lights_non_negative(self, seed: int, target: str) -> None:
+    @staticmethod
+    def _random_lights_non_negative(seed: int, target: str) -> None:
         rng = np.random.default_rng(seed)
         c = np.stack([light(rng, 3) for _ in range(8)])
         with warnings.catch_warnings():
@@ -500,6 +560,17 @@ class TestDering:
             out, scales, failed = dering.dering(c, target=target, return_failed=True)
         assert not failed.any() and np.all(target_min_rel(out, target) >= -NONNEG_RTOL)
         assert np.all(np.isfinite(out)) and np.all(np.isfinite(scales))
+
+    @HYPOTHESIS_CORE
+    @given(seed=SEEDS, target=st.sampled_from(dering.DERING_TARGETS))
+    def test_random_lights_non_negative(self, seed: int, target: str) -> None:
+        self._random_lights_non_negative(seed, target)
+
+    @pytest.mark.slow
+    @HYPOTHESIS
+    @given(seed=SEEDS, target=st.sampled_from(dering.DERING_TARGETS))
+    def test_random_lights_non_negative_full(self, seed: int, target: str) -> None:
+        self._random_lights_non_negative(seed, target)
 
     def test_single_deltas_many_directions(self) -> None:
         dirs = unit(np.random.default_rng(1).normal(size=(60, 3)))

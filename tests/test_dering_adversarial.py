@@ -12,8 +12,9 @@ For every input: if ``failed`` is False, the target of the output has a referenc
 minimum (:func:`test_dering.reference_min`, independent of the module) >= -1e-12 of
 its size; if True, the last row is not non-negative by the reference (beyond the
 certificate's margin for 4..7 bands), and a DeringWarning was issued. Non-negative
-lights never fail. The default run checks 15,000 inputs at 1..3 bands and 1,200 at
-4..7; ``-m slow`` runs 10^5 per band count at 1..3 and 10^4 at 4..7.
+lights never fail. The core run checks 1,000 inputs per band count at 1..3 bands and 100
+at 4..7 (all 10 families); ``-m slow`` adds the same seeds at 5,000 and 300 per band count
+and runs 10^5 per band count at 1..3 and 10^4 at 4..7.
 """
 
 from __future__ import annotations
@@ -122,13 +123,30 @@ def run_families(bands: int, per_family: int, seed: int) -> None:
         check(family(rng, kind, per_family, bands), bands, kind in PHYSICAL)
 
 
+CORE_PER_FAMILY: dict[str, int] = {"1..3": 100, "4..7": 10}
+"""Inputs per family and band count in the core run (``-m "not slow"``): every family at every band count.
+The ``slow`` twins run the former 500 and 30 from the same seeds."""
+
+
 class TestNeverNegative:
     @pytest.mark.parametrize("bands", [1, 2, 3])
     def test_one_to_three_bands(self, bands: int) -> None:
-        run_families(bands, 500, 1000 + bands)
+        run_families(bands, CORE_PER_FAMILY["1..3"], 1000 + bands)
 
     @pytest.mark.parametrize("bands", [4, 5, 6, 7])
     def test_four_to_seven_bands(self, bands: int) -> None:
+        run_families(bands, CORE_PER_FAMILY["4..7"], 2000 + bands)
+
+    @pytest.mark.slow
+    @pytest.mark.parametrize("bands", [1, 2, 3])
+    def test_one_to_three_bands_500(self, bands: int) -> None:
+        """The core test's seed at 500 inputs per family (5,000 per band count)."""
+        run_families(bands, 500, 1000 + bands)
+
+    @pytest.mark.slow
+    @pytest.mark.parametrize("bands", [4, 5, 6, 7])
+    def test_four_to_seven_bands_30(self, bands: int) -> None:
+        """The core test's seed at 30 inputs per family (300 per band count)."""
         run_families(bands, 30, 2000 + bands)
 
     @pytest.mark.slow

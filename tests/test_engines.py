@@ -9,6 +9,9 @@ Tests of skysh.engines against each engine's own code
     in double precision.
 -   Every comparison has a negative control: the unconverted coefficients must fail it.
 
+The node processes start in the background when the module begins (test_startup.Prefetched); the
+tests that read them are marked ``late``: the Python-only tests overlap them.
+
 References are skysh's own evaluation (:func:`skysh.sh.evaluate` of the radiance L, or of the
 irradiance E = A_l L, or E / pi) at skysh directions d; the engines are evaluated at ``M d``
 with M the engine frame written here from ``docs/engines.md`` (not taken from the module).
@@ -20,12 +23,15 @@ import json
 import math
 import shutil
 import subprocess
+from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from test_startup import Prefetched, prefetched, start_early
 
 from skysh import engines, sh
 from skysh.runtime import SkySH
@@ -295,8 +301,9 @@ def cube_sets(sets: list[np.ndarray]) -> list[np.ndarray]:
     return [c + dc * np.abs(c).max() for c in sets[4:7]]
 
 
-def run_engines(sets: list[np.ndarray], d: np.ndarray, cube_size: int = 64) -> dict:
-    """One node run: every set converted (three, babylon), then the same sets unconverted (controls)."""
+def engines_job(sets: list[np.ndarray], d: np.ndarray, cube_size: int = 64) -> tuple[dict, list[np.ndarray]]:
+    """The input of one node run of engines.mjs (every set converted for three and babylon, then the same sets
+    unconverted: the controls; the cube-map sets), and those cube-map sets (:func:`cube_sets`)."""
     converted = {e: [engines.convert(c, e).ravel().tolist() for c in sets] for e in ("threejs", "babylon")}
     raw = [pad9(c).ravel().tolist() for c in sets]
     cubes = cube_sets(sets)
@@ -306,18 +313,55 @@ def run_engines(sets: list[np.ndarray], d: np.ndarray, cube_size: int = 64) -> d
         "babylonCubemap": {"size": cube_size, "frame": FRAMES["lh-y-up"].tolist(),
                            "sets": [c.ravel().tolist() for c in cubes]},
     }
+    return job, cubes
+
+
+def run_engines(sets: list[np.ndarray], d: np.ndarray, cube_size: int = 64) -> dict:
+    """One node run: every set converted (three, babylon), then the same sets unconverted (controls)."""
+    job, cubes = engines_job(sets, d, cube_size)
     return {"out": run_node(job), "count": len(sets), "cube_sets": cubes}
 
 
+def snippets_program(c: np.ndarray) -> tuple[str, str]:
+    """Babylon's snippet of ``c`` as engines.snippet writes it, and one node module running both JavaScript snippets
+    of ``c`` that prints the numbers the engine objects hold. (Babylon's import is pointed at the one module it
+    needs: the package root takes 2 s to load.)"""
+    three, babylon = engines.snippet(c, "threejs"), engines.snippet(c, "babylon")
+    module = babylon.replace("from '@babylonjs/core';", "from '@babylonjs/core/Maths/sphericalPolynomial.js';")
+    names = json.dumps(["l00", "l1_1", "l10", "l11", "l2_2", "l2_1", "l20", "l21", "l22"])
+    tail = (f"\nconsole.log(JSON.stringify([skyProbe.sh.toArray(), "
+            f"{names}.flatMap((n) => skyHarmonics[n].asArray())]));\n")
+    return babylon, three + module + tail
+
+
 @pytest.fixture(scope="module")
-def node_results(coefficient_sets: list[np.ndarray], dirs: np.ndarray) -> dict:
+def node_runs(request: pytest.FixtureRequest, coefficient_sets: list[np.ndarray],
+              dirs: np.ndarray) -> Iterator[Prefetched[Any]]:
+    """The module's node processes, in the background from its start: ``engines`` (engines.mjs on the test sets)
+    and ``snippets`` (the snippets of set 1). Their inputs are computed here; the jobs only run node."""
+    job, cubes = engines_job(coefficient_sets, dirs, CUBE_SIZE)
+    program = snippets_program(coefficient_sets[1])[1]
+    yield from prefetched(request, {
+        "engines": lambda: {"out": run_node(job), "count": len(coefficient_sets), "cube_sets": cubes},
+        "snippets": lambda: run_node({}, code=program),
+    })
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _start_early(request: pytest.FixtureRequest) -> None:
+    start_early(request, "node_runs")
+
+
+@pytest.fixture(scope="module")
+def node_results(node_runs: Prefetched[Any]) -> dict:
     _node_available()
-    return run_engines(coefficient_sets, dirs, CUBE_SIZE)
+    return node_runs.result("engines")
 
 
 THREE_OUTPUTS = (("getAt", radiance), ("getIrradianceAt", irradiance), ("probeShader", irradiance))
 
 
+@pytest.mark.late
 @pytest.mark.parametrize("output, reference", THREE_OUTPUTS, ids=[o for o, _ in THREE_OUTPUTS])
 def test_threejs_matches_skysh(node_results: dict, coefficient_sets: list, dirs: np.ndarray, output, reference):
     """SphericalHarmonics3.fromArray + LightProbe: getAt is the radiance, getIrradianceAt and the
@@ -327,6 +371,7 @@ def test_threejs_matches_skysh(node_results: dict, coefficient_sets: list, dirs:
         assert rel_error(np.array(values[k]), reference(c, dirs)) <= SIX_DIGIT_TOL, (output, k)
 
 
+@pytest.mark.late
 @pytest.mark.parametrize("output, reference", THREE_OUTPUTS, ids=[o for o, _ in THREE_OUTPUTS])
 def test_threejs_negative_control(node_results: dict, coefficient_sets: list, dirs: np.ndarray, output, reference):
     values = node_results["out"]["threejs"][output]
@@ -335,6 +380,7 @@ def test_threejs_negative_control(node_results: dict, coefficient_sets: list, di
         assert rel_error(np.array(values[n + k]), reference(c, dirs)) > CONTROL_MIN, (output, k)
 
 
+@pytest.mark.late
 def test_babylon_default_path_matches_skysh(node_results: dict, coefficient_sets: list, dirs: np.ndarray):
     """SphericalHarmonics.FromArray -> SphericalPolynomial.FromHarmonics -> BindIBLParameters (default
     SPHERICAL_HARMONICS define) -> computeEnvironmentIrradiance of harmonicsFunctions.fx: E / pi."""
@@ -346,6 +392,7 @@ def test_babylon_default_path_matches_skysh(node_results: dict, coefficient_sets
         assert rel_error(np.array(values[n + k]), reference) > CONTROL_MIN, k  # negative control
 
 
+@pytest.mark.late
 def test_babylon_serialized_polynomial(node_results: dict, coefficient_sets: list, dirs: np.ndarray):
     """A polynomial reloaded without its harmonics (SphericalPolynomial.FromArray) goes back through
     FromPolynomial: right up to Babylon's 0.886277 constant (BABYLON_SERIALIZED_TOL)."""
@@ -354,6 +401,7 @@ def test_babylon_serialized_polynomial(node_results: dict, coefficient_sets: lis
         assert rel_error(np.array(values[k]), irradiance(c, dirs) / math.pi) <= BABYLON_SERIALIZED_TOL, k
 
 
+@pytest.mark.late
 def test_babylon_polynomial_branch_convolves_again(node_results: dict, coefficient_sets: list, dirs: np.ndarray):
     """Babylon's non-default branch (brdf.useSphericalHarmonics = false) evaluates the polynomial of
     FromHarmonics, which applies A_l / pi once more: it gives sum (A_l / pi)^2 L_i Y_i, not E / pi,
@@ -367,6 +415,7 @@ def test_babylon_polynomial_branch_convolves_again(node_results: dict, coefficie
         assert rel_error(np.array(values[k]), reference) > CONTROL_MIN, k
 
 
+@pytest.mark.late
 def test_babylon_cube_map_projector_agrees(node_results: dict):
     """Babylon's ConvertCubeMapToSphericalPolynomial, fed cube faces showing the skysh radiance in
     Babylon's frame, keeps the harmonics convert(..., 'babylon') gives (A_l / pi, CS phase)."""
@@ -377,6 +426,7 @@ def test_babylon_cube_map_projector_agrees(node_results: dict):
         assert rel_error(harmonics, pad9(c)) > CONTROL_MIN, k
 
 
+@pytest.mark.late
 @pytest.mark.parametrize("engine", ["threejs", "babylon"])
 def test_python_formulas_match_node(node_results: dict, coefficient_sets: list, dirs: np.ndarray, engine: str):
     """The Python transcriptions used by the sun tests are the engines' code (same numbers as node)."""
@@ -388,18 +438,15 @@ def test_python_formulas_match_node(node_results: dict, coefficient_sets: list, 
         assert rel_error(mine, node) <= EXACT_TOL, k
 
 
-def test_js_snippets_run_and_build_the_numbers(coefficient_sets: list):
-    """Both JavaScript snippets, run in one node module, build engine objects holding exactly convert()'s
-    numbers. (Babylon's import is pointed at the one module it needs: the package root takes 2 s to load.)"""
+@pytest.mark.late
+def test_js_snippets_run_and_build_the_numbers(coefficient_sets: list, node_runs: Prefetched[Any]):
+    """Both JavaScript snippets, run in one node module (:func:`snippets_program`), build engine objects holding
+    exactly convert()'s numbers."""
     _node_available()
     c = coefficient_sets[1]
-    three, babylon = engines.snippet(c, "threejs"), engines.snippet(c, "babylon")
+    babylon = snippets_program(c)[0]
     assert "from '@babylonjs/core';" in babylon
-    babylon = babylon.replace("from '@babylonjs/core';", "from '@babylonjs/core/Maths/sphericalPolynomial.js';")
-    names = json.dumps(["l00", "l1_1", "l10", "l11", "l2_2", "l2_1", "l20", "l21", "l22"])
-    tail = (f"\nconsole.log(JSON.stringify([skyProbe.sh.toArray(), "
-            f"{names}.flatMap((n) => skyHarmonics[n].asArray())]));\n")
-    got = json.loads(run_node({}, code=three + babylon + tail))
+    got = json.loads(node_runs.result("snippets"))
     assert got == [engines.convert(c, "threejs").ravel().tolist(), engines.convert(c, "babylon").ravel().tolist()]
 
 

@@ -33,6 +33,7 @@ import re
 import struct
 import subprocess
 import sys
+import time
 import types
 import zlib
 from collections.abc import Iterator
@@ -41,6 +42,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import ROOT, fibonacci_sphere
+
+pytestmark = [pytest.mark.xdist_group("error_report")] if importlib.util.find_spec("xdist") else []
+"""``pytest -n N --dist loadgroup``: one worker runs this module (its module fixtures once; the quick run is shared)."""
 
 TOOL = ROOT / "tools" / "error_report.py"
 PACKAGE = ROOT / "tools" / "report"
@@ -111,25 +115,70 @@ def quick_env() -> dict[str, str]:
     return dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
 
 
+def in_xdist_worker(config: pytest.Config) -> bool:
+    """True in a pytest-xdist worker process (which collects every test but runs only those it is sent)."""
+    return hasattr(config, "workerinput")
+
+
 @pytest.fixture(scope="module")
-def wiring_run(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[subprocess.Popen, Path]]:
-    """The default quick run, started in the background (see _start_the_wiring_run); killed if left running."""
-    out = tmp_path_factory.mktemp("report_wiring")
-    process = subprocess.Popen(quick_command("wiring", out), cwd=ROOT, env=quick_env(), stdout=subprocess.PIPE,
-                               stderr=subprocess.PIPE, text=True)
-    yield process, out
+def wiring_run(request: pytest.FixtureRequest,
+               tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[subprocess.Popen | None, Path]]:
+    """The default quick run, once per session, in the background: (its process, or None where another pytest-xdist
+    worker started it; its folder: report in ``out/``, output in ``stdout``, ``stderr``). Under xdist the folder is in
+    the temporary folder all workers share; the first to ask creates ``started`` exclusively and starts the run.
+    A run left unread is killed with the module's teardown."""
+    base = tmp_path_factory.getbasetemp()
+    folder = (base.parent if in_xdist_worker(request.config) else base) / "report_wiring"
+    folder.mkdir(exist_ok=True)
+    try:
+        os.close(os.open(folder / "started", os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+    except FileExistsError:
+        yield None, folder
+        return
+    with open(folder / "stdout", "w", encoding="utf-8") as stdout, open(folder / "stderr", "w", encoding="utf-8") as stderr:
+        process = subprocess.Popen(quick_command("wiring", folder / "out"), cwd=ROOT, env=quick_env(), stdout=stdout,
+                                   stderr=stderr, text=True)
+    yield process, folder
     if process.poll() is None:
         process.kill()
-        process.communicate()
+        process.wait()
+
+
+def wiring_result(process: subprocess.Popen | None, folder: Path) -> subprocess.CompletedProcess:
+    """The finished default quick run: its starter waits and writes ``returncode`` atomically, others wait for it."""
+    status = folder / "returncode"
+    if process is not None:
+        try:
+            process.wait(timeout=TIMEOUT_S)
+            code = str(process.returncode)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()
+            code = "timeout"
+        (folder / "returncode.part").write_text(code, encoding="utf-8")
+        os.replace(folder / "returncode.part", status)
+    deadline = time.monotonic() + TIMEOUT_S
+    while not status.exists() and time.monotonic() < deadline:
+        time.sleep(0.2)
+    code = status.read_text(encoding="utf-8") if status.exists() else "timeout"
+    if code == "timeout":
+        pytest.fail(f"{' '.join(quick_command('wiring', folder / 'out')[1:])} did not finish within {TIMEOUT_S:.0f} s")
+    return subprocess.CompletedProcess(quick_command("wiring", folder / "out"), int(code),
+                                       (folder / "stdout").read_text(encoding="utf-8"),
+                                       (folder / "stderr").read_text(encoding="utf-8"))
 
 
 @pytest.fixture(scope="module", autouse=True)
 def _start_the_wiring_run(request: pytest.FixtureRequest) -> None:
     """Start the default quick run with the module's first test when a selected test reads it: the run then
     works in its own process while the in-process tests below run, and TestQuickRun (marked ``late``:
-    conftest runs it after the rest of the module) waits for it."""
-    if any(item.module is request.module and "quick" in item.fixturenames and "[wiring]" in item.nodeid
-           for item in request.session.items):
+    conftest runs it after the rest of the module) waits for it.
+
+    Not in a pytest-xdist worker, which cannot know whether it will be sent TestQuickRun: there :func:`quick` starts
+    the run when first asked (one run for all workers: :func:`wiring_run`)."""
+    if not in_xdist_worker(request.config) and any(
+            item.module is request.module and "quick" in item.fixturenames and "[wiring]" in item.nodeid
+            for item in request.session.items):
         request.getfixturevalue("wiring_run")
 
 
@@ -137,14 +186,8 @@ def _start_the_wiring_run(request: pytest.FixtureRequest) -> None:
 def quick(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> dict:
     name = request.param
     if name == "wiring":
-        process, out = request.getfixturevalue("wiring_run")
-        try:
-            stdout, stderr = process.communicate(timeout=TIMEOUT_S)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            process.communicate()
-            pytest.fail(f"{' '.join(quick_command(name, out)[1:])} did not finish within {TIMEOUT_S:.0f} s")
-        proc = subprocess.CompletedProcess(process.args, process.returncode, stdout, stderr)
+        process, folder = request.getfixturevalue("wiring_run")
+        proc, out = wiring_result(process, folder), folder / "out"
     else:
         out = tmp_path_factory.mktemp(f"report_{name}")
         command = quick_command(name, out)
@@ -478,7 +521,27 @@ def quick_ctx(report: types.SimpleNamespace, tmp_path_factory: pytest.TempPathFa
 
 
 @pytest.fixture(scope="module")
-def section_11(report: types.SimpleNamespace, quick_ctx: object,
+def solved_once(report: types.SimpleNamespace) -> Iterator[None]:
+    """``irradiance_study.solve_job`` (a sky's optimum: a pure function of its truth and the objective) memoised for
+    the module: section 11's fixture and the run without the runtime table solve the same 24 problems (6 skies x 4
+    objectives), the second reads the first's (in one process). The latter's grid solve is not memoised."""
+    study = report.s11_irradiance_table.study
+    solve_job, solved = study.solve_job, {}
+
+    def memoised(job: tuple[np.ndarray, object]) -> np.ndarray:
+        truth, objective = job
+        key = (np.ascontiguousarray(truth).tobytes(), objective)
+        if key not in solved:
+            solved[key] = solve_job(job)
+        return solved[key].copy()
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(study, "solve_job", memoised)
+        yield
+
+
+@pytest.fixture(scope="module")
+def section_11(report: types.SimpleNamespace, quick_ctx: object, solved_once: None,
                tmp_path_factory: pytest.TempPathFactory) -> tuple[dict, object]:
     s11 = report.s11_irradiance_table
     with pytest.MonkeyPatch.context() as patch:  # no dependence on the study's cache in build/
@@ -544,7 +607,8 @@ class TestIrradianceTableSection:
         assert np.all(lowest <= sampled) and np.all(sampled - lowest <= LOWEST_SAMPLED_GAP)
 
     def test_without_the_runtime_table_a_grid_is_solved_and_fitted(self, report: types.SimpleNamespace, quick_ctx: object,
-                                                                   tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+                                                                   solved_once: None, tmp_path: Path,
+                                                                   monkeypatch: pytest.MonkeyPatch) -> None:
         s11 = report.s11_irradiance_table
         monkeypatch.setattr(s11, "STUDY_GRID_CACHE", tmp_path)
         monkeypatch.setattr(s11.study, "runtime_has_irradiance_table", lambda sky: False)

@@ -32,24 +32,46 @@ demanding one.
 The C export is compiled with the machine's C compiler (skipped without one);
 GLSL and HLSL are validated with glslangValidator when it is installed
 (Debian's ``glslang-tools``; skipped otherwise) and always checked structurally.
+Compiles and validations go through the session's :class:`conftest.ToolRuns`: each
+distinct one (command, header and harness text) is made once and shared by the tests
+that need it (one harness, test_export_lights.C_HARNESS, serves ``skysh_coefficients`` and
+``skysh_engine_coefficients`` of a header, here and in tests/test_export_lights.py),
+and the module queues them all when it starts (:func:`_prefetch`), so they overlap
+each other and the Python comparisons.
 
 ``python tests/test_export.py`` prints the measured figures as JSON lines.
 """
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 import re
 import shutil
 import subprocess
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
-from conftest import dc_relative_error, engine_cases, is_padded_identity
+from conftest import (
+    GLSLANG,
+    PLAIN_DIP,
+    RUN_DIR,
+    Exported,
+    ToolJob,
+    ToolRuns,
+    dc_relative_error,
+    engine_cases,
+    glslang_job,
+    is_padded_identity,
+    prefetch_runs,
+    selected_names,
+)
+from test_export_lights import CC, c_harness_job, compile_harness
 
 from skysh import SkySH, cli, preetham, sh, shmin
 from skysh.export import (
@@ -75,25 +97,11 @@ FLOAT32_TABLE_TOLERANCE: float = 1e-6
 """Float32 tables alone, evaluated in double (the GLSL/HLSL tables as
 written); measured about 1e-7."""
 
-HARNESS: str = r"""
-#include <stdio.h>
-#include SKYSH_HEADER
-int main(void) {
-    double ts, t, phi;
-    int gibbs, dering, irradiance, table, i, c;
-    skysh_real out[SKYSH_COUNT][3];
-    while (scanf("%lf %lf %lf %d %d %d %d", &ts, &t, &phi, &gibbs, &dering, &irradiance, &table) == 7) {
-        int rc = skysh_coefficients((skysh_real)ts, (skysh_real)t, (skysh_real)phi, gibbs, dering, irradiance, 0, NULL,
-                                    table, out);
-        printf("%d", rc);
-        for (i = 0; i < SKYSH_COUNT; ++i)
-            for (c = 0; c < 3; ++c)
-                printf(" %.17g", (double)out[i][c]);
-        printf("\n");
-    }
-    return 0;
-}
-"""
+Job = ToolJob
+"""A tool run for :class:`conftest.ToolRuns`: (argv, files written to its directory first)."""
+
+NO_LIGHTS: str = "0 1 0 0 0"
+"""The harness fields (sun, null_albedo, albedo r g b) of a line without the sun and the ground (test_export_lights.C_HARNESS)."""
 
 AZIMUTH_TOLERANCE: float = 1e-14
 """Large azimuths, reduced by an exact fmod in both the export and the runtime: the
@@ -102,18 +110,12 @@ same rounding as azimuth 0 (the unreduced export was 1.3e-13 off at -12345.678).
 CONTROL_MARGIN: float = 1e3
 """A negative control must miss by this factor times the tolerance."""
 
-PLAIN_DIP: float = -1e-3
-"""The unconstrained projection's minimum over the sphere (of the mean) must fall below this for the
-non-negativity check to be able to fail: the size of the table's own margin (1e-3 of the mean), with sign flipped."""
-
 ENGINE_SNAP_TOL: float = 1e-13
 """export_js's engine plan against the engine's map, over the largest entry: the fold snaps entries to 1 within
 export_js.ENGINE_UNIT (1e-14) and to 0 within ENGINE_ZERO (1e-13) of the largest, and otherwise only divides and
 multiplies by the band factor (a few ulps): ENGINE_ZERO bounds both."""
 
-CC: str | None = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
 CXX: str | None = shutil.which("c++") or shutil.which("g++") or shutil.which("clang++")
-GLSLANG: str | None = shutil.which("glslangValidator")
 
 
 def points() -> list[tuple[float, float, float, int, int]]:
@@ -146,32 +148,21 @@ def runtime_values(sky: SkySH, pts: list, bands: int) -> np.ndarray:
     ])
 
 
-def compile_c(source: str, directory: Path) -> Path:
-    assert CC is not None
-    (directory / "sky.h").write_text(source)
-    (directory / "harness.c").write_text(HARNESS)
-    binary = directory / "harness"
-    result = subprocess.run(
-        [CC, "-std=c99", "-O2", "-Wall", "-Wextra", "-pedantic", "-Werror", '-DSKYSH_HEADER="sky.h"',
-         "-o", str(binary), str(directory / "harness.c"), "-lm"],
-        capture_output=True, text=True, check=False,
-    )
-    assert result.returncode == 0, result.stderr
-    return binary
-
-
 def run_c(binary: Path, pts: list) -> tuple[np.ndarray, np.ndarray]:
-    text = "\n".join(f"{p[0]!r} {p[1]!r} {p[2]!r} {p[3]} {p[5] if p[5:] else 0} {p[4]} {table_of(p)}" for p in pts) + "\n"
+    """skysh_coefficients of the harness ``binary`` at points (ts, t, phi, gibbs, irradiance[, dering[, table]]), without
+    the sun and the ground: (return codes, coefficients (n, SKYSH_COUNT, 3))."""
+    text = "\n".join(f"0 {p[0]!r} {p[1]!r} {p[2]!r} {p[3]} {p[5] if p[5:] else 0} {p[4]} {NO_LIGHTS} {table_of(p)}"
+                     for p in pts) + "\n"
     out = subprocess.run([str(binary)], input=text, capture_output=True, text=True, check=True).stdout.splitlines()
     rows = [np.array(line.split(), dtype=np.float64) for line in out]
     codes = np.array([row[0] for row in rows])
-    return codes, np.array([row[1:].reshape(-1, 3) for row in rows])
+    return codes, np.array([row[8:].reshape(-1, 3) for row in rows])
 
 
-def c_error(sky: SkySH, bands: int, real: str, directory: Path) -> float:
-    binary = compile_c(export_source(sky, "c", bands=bands, real=real), directory)
+def c_error(sky: SkySH, source: str, bands: int, runs: ToolRuns) -> float:
+    """The C export ``source`` (``bands`` bands) at :func:`points` against the runtime."""
     pts = points()
-    codes, got = run_c(binary, pts)
+    codes, got = run_c(compile_harness(source, runs), pts)
     assert np.all(codes == 0)
     return dc_relative_error(got, runtime_values(sky, pts, bands))
 
@@ -207,9 +198,10 @@ def parse_shader_table(source: str, name: str = "SKYSH_TABLE") -> np.ndarray:
     return np.array([[np.float32(v) for v in triple.split(",")] for triple in triples], dtype=np.float32)
 
 
-def shader_float32_table_error(sky: SkySH, bands: int, language: str = "glsl") -> float:
+def shader_float32_table_error(sky: SkySH, source: str, bands: int) -> float:
+    """The float32 table of the shader export ``source`` (``bands`` bands), evaluated in double, against the runtime."""
     tables = export_tables(sky, bands)
-    table32 = parse_shader_table(export_source(sky, language, bands=bands))
+    table32 = parse_shader_table(source)
     rows = tables.table.shape[2] + (bands == 1)  # one band: the unfiltered c_10 follows (not evaluated here)
     table = table32.astype(np.float64).reshape(tables.table.shape[:2] + (rows, 3))[:, :, : tables.table.shape[2]]
     pts = points()
@@ -224,20 +216,147 @@ def shader_float32_table_error(sky: SkySH, bands: int, language: str = "glsl") -
 
 
 # --------------------------------------------------------------------------- #
+# The module's compiles and validations (conftest.ToolRuns: each distinct one once)
+# --------------------------------------------------------------------------- #
+SHADER_BANDS: list[int] = [1, 3, 7]
+"""Band counts of the plain shader exports compiled by glslangValidator."""
+
+GLSL_VERSIONS: list[str] = ["330", "300 es"]
+"""GLSL versions the shader exports are compiled for (desktop and ES)."""
+
+CHOICE_VERSIONS: list[str] = ["330", "300 es", "hlsl"]
+"""The shader targets of TestShaderIrradianceTable.test_compiles_with_every_choice."""
+
+CHOICE_ENGINES: list[str | None] = [None, "unity"]
+"""Without and with an engine, in the same test."""
+
+
+def unit_job(source: str, compiler: str) -> Job:
+    """A translation unit that includes the header ``source`` twice and uses none of it, compiled (not linked) as
+    C99 (``compiler`` "c") or C++11 ("c++") with unused-function warnings as errors."""
+    tool = CC if compiler == "c" else CXX
+    assert tool is not None
+    standard = ["-std=c99", "-pedantic"] if compiler == "c" else ["-x", "c++", "-std=c++11"]
+    return ([tool, *standard, "-Wall", "-Wextra", "-Wunused-function", "-Werror", "-c", "-o", f"{RUN_DIR}/unit.o",
+             f"{RUN_DIR}/unit.c"],
+            {"sky_sh.h": source, "unit.c": '#include "sky_sh.h"\n#include "sky_sh.h"\nint unit(void) { return SKYSH_COUNT; }\n'})
+
+
+def sky_shader(source: str, version: str) -> str:
+    """A fragment shader calling skysh_coefficients of the export ``source`` (GLSL ``version``, or "hlsl")."""
+    if version == "hlsl":
+        return (source + "float4 params;\nfloat4 main() : SV_Target {\n    float3 c[SKYSH_COUNT];\n"
+                "    bool ok = skysh_coefficients(params.x, params.y, params.z, true, params.w > 0.0, false, false,\n"
+                "        float3(0.0, 0.0, 0.0), SKYSH_BY_INTENT, c);\n"
+                "    return float4(c[0] + c[SKYSH_COUNT - 1], ok ? 1.0 : 0.0);\n}\n")
+    precision = "precision highp float;\n" if version.endswith("es") else ""
+    return (f"#version {version}\n{precision}" + source
+            + "uniform vec4 params;\nout vec4 colour;\nvoid main() {\n    vec3 c[SKYSH_COUNT];\n"
+            "    bool ok = skysh_coefficients(params.x, params.y, params.z, true, params.w > 0.0, false, false, vec3(0.0),\n"
+            "        SKYSH_BY_INTENT, c);\n"
+            "    colour = vec4(c[0] + c[SKYSH_COUNT - 1], ok ? 1.0 : 0.0);\n}\n")
+
+
+def engine_shader(source: str, language: str) -> str:
+    """A fragment shader calling skysh_engine_coefficients of the engine export ``source`` (GLSL 330 or HLSL)."""
+    if language == "glsl":
+        return ("#version 330\n" + source + "uniform vec4 params;\nout vec4 colour;\nvoid main() {\n"
+                "    float v[SKYSH_ENGINE_COUNT];\n    bool ok = skysh_engine_coefficients(params.x, params.y, params.z, "
+                "false, params.w > 0.0, true, vec3(0.2), SKYSH_BY_INTENT, v);\n"
+                "    colour = vec4(v[0], v[SKYSH_ENGINE_COUNT - 1], 0.0, ok ? 1.0 : 0.0);\n}\n")
+    return (source + "float4 params;\nfloat4 main() : SV_Target {\n    float v[SKYSH_ENGINE_COUNT];\n"
+            "    bool ok = skysh_engine_coefficients(params.x, params.y, params.z, false, params.w > 0.0, true,\n"
+            "        float3(0.2, 0.2, 0.2), SKYSH_BY_INTENT, v);\n"
+            "    return float4(v[0], v[SKYSH_ENGINE_COUNT - 1], 0.0, ok ? 1.0 : 0.0);\n}\n")
+
+
+def choice_shader(source: str, version: str, engine: str | None) -> str:
+    """A fragment shader (GLSL ``version`` or "hlsl") passing irradianceTable from a uniform, so that every value
+    reaches the code, to skysh_coefficients or (with ``engine``) skysh_engine_coefficients of ``source``."""
+    glsl = version != "hlsl"
+    vec3, args = ("vec3" if glsl else "float3"), "params.x, params.y, params.z, false, true"
+    call = (f"skysh_engine_coefficients({args}, false, {vec3}(0.2, 0.2, 0.2), int(params.w) - 1, v)" if engine
+            else f"skysh_coefficients({args}, true, false, {vec3}(0.2, 0.2, 0.2), int(params.w) - 1, c)")
+    decl = "float v[SKYSH_ENGINE_COUNT];" if engine else f"{vec3} c[SKYSH_COUNT];"
+    use = "v[0]" if engine else "c[0].x"
+    if glsl:
+        precision = "precision highp float;\n" if version.endswith("es") else ""
+        return (f"#version {version}\n{precision}{source}uniform vec4 params;\nout vec4 colour;\n"
+                f"void main() {{\n    {decl}\n    bool ok = {call};\n"
+                f"    colour = vec4({use}, 0.0, 0.0, ok ? 1.0 : 0.0);\n}}\n")
+    return (f"{source}float4 params;\nfloat4 main() : SV_Target {{\n    {decl}\n    bool ok = {call};\n"
+            f"    return float4({use}, 0.0, 0.0, ok ? 1.0 : 0.0);\n}}\n")
+
+
+def turned_the_other_way(source: str) -> str:
+    """The C header ``source`` with its rotation (Habel eq. 4) turning the other way (a negative control)."""
+    return source.replace("const skysh_real rot = m < 0 ? sin(k * phi)", "const skysh_real rot = m < 0 ? -sin(k * phi)")
+
+
+def c_jobs(exported: Exported, wanted: set[str]) -> Iterator[Job]:
+    """The C builds of the tests (and classes) named in ``wanted``, in the order the tests run."""
+    if CC is None:
+        return
+    engines = engine_cases()
+    if wanted & {"TestCExport", "TestCHeader", "TestCDering", "TestCIrradianceTable"}:
+        yield from (c_harness_job(exported("c", bands=bands, real=real)) for bands, real in (
+            (1, "double"), (3, "double"), (7, "double"), (3, "float"), (7, "float"), (2, "double"), (4, "double")))
+    if "test_included_twice_and_unused_compiles_without_warnings" in wanted:
+        yield from (unit_job(exported("c", bands=3), compiler) for compiler in ("c", "c++") if compiler == "c" or CXX)
+    if "test_negative_control_wrong_rotation_sign" in wanted:
+        yield c_harness_job(turned_the_other_way(exported("c", bands=3)))
+    if wanted & {"test_matches_convert", "test_negative_control_unconverted_fails", "test_engine_with_dering",
+                 "test_engines_take_the_table_by_intent"}:
+        yield from (c_harness_job(exported("c", bands=bands, engine=name)) for name, bands in engines)
+    if engines and "test_float_build" in wanted:
+        yield c_harness_job(exported("c", bands=engines[-1][1], engine=engines[-1][0], real="float"))
+
+
+def shader_jobs(exported: Exported, wanted: set[str]) -> Iterator[Job]:
+    """The glslangValidator runs of the tests named in ``wanted``."""
+    if GLSLANG is None:
+        return
+    if "test_shader_structure" in wanted:
+        yield from (glslang_job(engine_shader(exported(language, bands=bands, engine=name), language), language)
+                    for name, bands in engine_cases() for language in ("glsl", "hlsl"))
+    if "test_glsl_compiles" in wanted:
+        yield from (glslang_job(sky_shader(exported("glsl", bands=bands), version), "glsl")
+                    for bands in SHADER_BANDS for version in GLSL_VERSIONS)
+    if "test_hlsl_compiles" in wanted:
+        yield from (glslang_job(sky_shader(exported("hlsl", bands=bands), "hlsl"), "hlsl") for bands in SHADER_BANDS)
+    if "test_compiles_with_every_choice" in wanted:
+        for engine in CHOICE_ENGINES:
+            for version in CHOICE_VERSIONS:
+                language = "hlsl" if version == "hlsl" else "glsl"
+                yield glslang_job(choice_shader(exported(language, bands=3, engine=engine), version, engine), language)
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _prefetch(request: pytest.FixtureRequest, exported: Exported, tool_runs: ToolRuns) -> None:
+    """Queue the compiles and validations of the module's selected tests when the module starts: they run in the
+    background (conftest.ToolRuns) while the tests compare numbers, and each test takes its own when it needs it.
+    The lists above only decide what is queued early; a test builds whatever it needs itself."""
+    if not tool_runs.eager:
+        return
+    wanted = selected_names(request)
+    prefetch_runs(tool_runs, itertools.chain(c_jobs(exported, wanted), shader_jobs(exported, wanted)))
+
+
+# --------------------------------------------------------------------------- #
 @pytest.mark.skipif(CC is None, reason="no C compiler on this machine")
 class TestCExport:
     @pytest.mark.parametrize("bands", [1, 3, 7])
-    def test_double_matches_runtime(self, sky: SkySH, bands: int, tmp_path: Path) -> None:
-        error = c_error(sky, bands, "double", tmp_path)
+    def test_double_matches_runtime(self, sky: SkySH, exported: Exported, tool_runs: ToolRuns, bands: int) -> None:
+        error = c_error(sky, exported("c", bands=bands, real="double"), bands, tool_runs)
         assert error < REQUIRED_TOLERANCE
         assert error < DOUBLE_TOLERANCE
 
     @pytest.mark.parametrize("bands", [3, 7])
-    def test_float_build_is_within_float32_error(self, sky: SkySH, bands: int, tmp_path: Path) -> None:
-        assert c_error(sky, bands, "float", tmp_path) < FLOAT32_TOLERANCE
+    def test_float_build_is_within_float32_error(self, sky: SkySH, exported: Exported, tool_runs: ToolRuns, bands: int) -> None:
+        assert c_error(sky, exported("c", bands=bands, real="float"), bands, tool_runs) < FLOAT32_TOLERANCE
 
-    def test_refuses_outside_the_domain(self, sky: SkySH, tmp_path: Path) -> None:
-        binary = compile_c(export_source(sky, "c", bands=2), tmp_path)
+    def test_refuses_outside_the_domain(self, sky: SkySH, exported: Exported, tool_runs: ToolRuns) -> None:
+        binary = compile_harness(exported("c", bands=2), tool_runs)
         bad = [(-0.01, 3.0, 0.0, 1, 0), (1.5708, 3.0, 0.0, 1, 0), (0.5, 2.49, 0.0, 1, 0), (0.5, 6.01, 0.0, 1, 0),
                (float("nan"), 3.0, 0.0, 1, 0), (0.5, 3.0, float("inf"), 1, 0)]
         codes, values = run_c(binary, bad)
@@ -246,8 +365,8 @@ class TestCExport:
             with pytest.raises(ValueError):
                 sky.coefficients(ts, t, phi, bands=2)
 
-    def test_domain_edges_are_accepted(self, sky: SkySH, tmp_path: Path) -> None:
-        binary = compile_c(export_source(sky, "c", bands=2), tmp_path)
+    def test_domain_edges_are_accepted(self, sky: SkySH, exported: Exported, tool_runs: ToolRuns) -> None:
+        binary = compile_harness(exported("c", bands=2), tool_runs)
         edges = [(0.0, 2.5, 0.0, 1, 0), (math.pi / 2.0, 6.0, 100.0, 0, 1)]
         codes, got = run_c(binary, edges)
         assert np.all(codes == 0)
@@ -258,29 +377,24 @@ class TestCExport:
 class TestCHeader:
     """Issue 13: the C export is a header; the azimuth is reduced as the runtime does."""
 
-    def test_names_itself_a_header(self, sky: SkySH) -> None:
-        source = export_source(sky, "c", bands=2)
+    def test_names_itself_a_header(self, exported: Exported) -> None:
+        source = exported("c", bands=2)
         assert DEFAULT_FILE_NAMES["c"] == "sky_sh.h"
         assert '#include "sky_sh.h"' in source and "-lm" in source
         assert "static int" not in source and "static skysh_real skysh" not in source  # every function static inline
 
     @pytest.mark.parametrize("compiler", ["c", "c++"])
-    def test_included_twice_and_unused_compiles_without_warnings(self, sky: SkySH, compiler: str, tmp_path: Path) -> None:
-        tool = CC if compiler == "c" else CXX
-        if tool is None:
+    def test_included_twice_and_unused_compiles_without_warnings(self, exported: Exported, tool_runs: ToolRuns,
+                                                                  compiler: str) -> None:
+        if (CC if compiler == "c" else CXX) is None:
             pytest.skip(f"no {compiler} compiler")
-        (tmp_path / "sky_sh.h").write_text(export_source(sky, "c", bands=3))
-        (tmp_path / "unit.c").write_text('#include "sky_sh.h"\n#include "sky_sh.h"\nint unit(void) { return SKYSH_COUNT; }\n')
-        standard = ["-std=c99", "-pedantic"] if compiler == "c" else ["-x", "c++", "-std=c++11"]
-        result = subprocess.run(
-            [tool, *standard, "-Wall", "-Wextra", "-Wunused-function", "-Werror", "-c", "-o", str(tmp_path / "unit.o"),
-             str(tmp_path / "unit.c")], capture_output=True, text=True, check=False,
-        )
+        result = tool_runs.run(*unit_job(exported("c", bands=3), compiler)).result
         assert result.returncode == 0, result.stderr
 
     @pytest.mark.parametrize("phi", [-12345.678, 1e6, -1e15, 1e300, 2.0 * math.pi])
-    def test_azimuth_is_reduced_as_the_runtime_does(self, sky: SkySH, phi: float, tmp_path: Path) -> None:
-        binary = compile_c(export_source(sky, "c", bands=7), tmp_path)
+    def test_azimuth_is_reduced_as_the_runtime_does(self, sky: SkySH, exported: Exported, tool_runs: ToolRuns,
+                                                    phi: float) -> None:
+        binary = compile_harness(exported("c", bands=7), tool_runs)
         pts = [(0.7, 3.3, phi, 0, 0), (1.2, 5.0, phi, 1, 1)]
         codes, got = run_c(binary, pts)
         assert np.all(codes == 0)
@@ -291,8 +405,8 @@ class TestCHeader:
 class TestCDering:
     """The 3-band deringing step (skysh.export_dering) against the runtime's dering, window for window."""
 
-    def test_matches_the_runtime(self, sky: SkySH, tmp_path: Path) -> None:
-        binary = compile_c(export_source(sky, "c", bands=3), tmp_path)
+    def test_matches_the_runtime(self, sky: SkySH, exported: Exported, tool_runs: ToolRuns) -> None:
+        binary = compile_harness(exported("c", bands=3), tool_runs)
         pts = [(*p, 1, 0) for p in points()]  # the old pipeline (irradiance_table 0): its deringing
         codes, got = run_c(binary, pts)
         ref = runtime_values(sky, pts, 3)
@@ -302,27 +416,27 @@ class TestCDering:
         windowed = sum(dc_relative_error(r[None], q[None]) > CONTROL_MARGIN * DOUBLE_TOLERANCE for r, q in zip(ref, plain))
         assert windowed > len(pts) // 10  # real windows are compared, not only identities
 
-    def test_float_build(self, sky: SkySH, tmp_path: Path) -> None:
-        binary = compile_c(export_source(sky, "c", bands=3, real="float"), tmp_path)
+    def test_float_build(self, sky: SkySH, exported: Exported, tool_runs: ToolRuns) -> None:
+        binary = compile_harness(exported("c", bands=3, real="float"), tool_runs)
         pts = [(*p, 1, 0) for p in points()]
         codes, got = run_c(binary, pts)
         assert np.all(codes == 0)
         assert dc_relative_error(got, runtime_values(sky, pts, 3)) < FLOAT32_TOLERANCE
 
     @pytest.mark.parametrize("bands", [2, 4])
-    def test_other_band_counts_refuse_it(self, sky: SkySH, bands: int, tmp_path: Path) -> None:
-        source = export_source(sky, "c", bands=bands)
+    def test_other_band_counts_refuse_it(self, exported: Exported, tool_runs: ToolRuns, bands: int) -> None:
+        source = exported("c", bands=bands)
         assert "#define SKYSH_DERING 0" in source and "skysh_dering3" not in source
-        codes, got = run_c(compile_c(source, tmp_path), [(0.5, 3.0, 0.0, 0, 1, 1), (0.5, 3.0, 0.0, 0, 1, 0)])
+        codes, got = run_c(compile_harness(source, tool_runs), [(0.5, 3.0, 0.0, 0, 1, 1), (0.5, 3.0, 0.0, 0, 1, 0)])
         assert codes.tolist() == [-2, 0] and np.all(got[0] == 0.0)
 
-    def test_engine_with_dering(self, sky: SkySH, tmp_path: Path) -> None:
+    def test_engine_with_dering(self, sky: SkySH, exported: Exported, tool_runs: ToolRuns) -> None:
         cases = [case for case in engine_cases() if case[1] == 3]
         if not cases:
             pytest.skip("skysh.engines does not exist yet")
         name = cases[-1][0]
         pts = [(*p, 1) for p in engine_points()]
-        codes, got = run_engine_c(export_source(sky, "c", bands=3, engine=name), tmp_path, pts)
+        codes, got = run_engine_c(exported("c", bands=3, engine=name), tool_runs, pts)
         ref, scale = engine_reference(sky, pts, name, 3)
         assert np.all(codes == 0)
         assert float(np.abs(got - ref).max()) / scale < DOUBLE_TOLERANCE
@@ -380,11 +494,11 @@ def relative_minimum(coeffs: np.ndarray) -> np.ndarray:
 
 
 @pytest.fixture(scope="module")
-def builds(sky: SkySH, tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+def builds(exported: Exported, tool_runs: ToolRuns) -> dict[str, Path]:
     """The headers of the table tests, compiled once: 3 bands (double, float), 7 bands (no table)."""
     if CC is None:
         pytest.skip("no C compiler on this machine")
-    return {name: compile_c(export_source(sky, "c", bands=bands, real=real), tmp_path_factory.mktemp(f"c{name}"))
+    return {name: compile_harness(exported("c", bands=bands, real=real), tool_runs)
             for name, bands, real in (("3", 3, "double"), ("3f", 3, "float"), ("7", 7, "double"))}
 
 
@@ -424,13 +538,13 @@ class TestCIrradianceTable:
         _, plain = run_c(builds[name], [f + (0, 1, 0, 0) for f in frames])
         assert relative_minimum(plain).min() < PLAIN_DIP  # measured -2.6e-2 of the mean
 
-    def test_negative_control_wrong_rotation_sign(self, sky: SkySH, tmp_path: Path) -> None:
+    def test_negative_control_wrong_rotation_sign(self, sky: SkySH, exported: Exported, tool_runs: ToolRuns) -> None:
         """A header whose rotation (Habel eq. 4) turns the other way must fail the comparison with the runtime."""
-        source = export_source(sky, "c", bands=3)
-        mutated = source.replace("const skysh_real rot = m < 0 ? sin(k * phi)", "const skysh_real rot = m < 0 ? -sin(k * phi)")
+        source = exported("c", bands=3)
+        mutated = turned_the_other_way(source)
         assert mutated != source
         pts = [p[:3] + (0, 1, 1, BY_INTENT) for p in table_points(40)]
-        worst, _ = table_error(sky, compile_c(mutated, tmp_path), pts, 3)
+        worst, _ = table_error(sky, compile_harness(mutated, tool_runs), pts, 3)
         assert worst > CONTROL_MARGIN * DOUBLE_TOLERANCE
 
     def test_refusals(self, sky: SkySH, builds: dict[str, Path]) -> None:
@@ -445,14 +559,14 @@ class TestCIrradianceTable:
             with pytest.raises(ValueError, match="irradiance_table"):
                 sky.coefficients(*frame, bands=bands, gibbs=gibbs, irradiance=True, irradiance_table=True)
 
-    def test_engines_take_the_table_by_intent(self, sky: SkySH, tmp_path: Path) -> None:
+    def test_engines_take_the_table_by_intent(self, sky: SkySH, exported: Exported, tool_runs: ToolRuns) -> None:
         """skysh_engine_coefficients at 3 bands: engines.convert of the runtime's radiance, the table's
         radiance-equivalent by intent (no Gibbs filter, deringing on), and with irradiance_table 0 and 1."""
         cases = [name for name, bands in engine_cases() if bands == 3]
         pts = [(ts, t, phi, g, 1, choice) for ts, t, phi, g in engine_points()[::3] for choice in (BY_INTENT, 0, 1)
                if not (g and choice == 1)]
         for name in cases:
-            codes, got = run_engine_c(export_source(sky, "c", bands=3, engine=name), tmp_path, pts)
+            codes, got = run_engine_c(exported("c", bands=3, engine=name), tool_runs, pts)
             ref, scale = engine_reference(sky, pts, name, 3)
             assert np.all(codes == 0) and float(np.abs(got - ref).max()) / scale < DOUBLE_TOLERANCE, name
         assert sum(engine_table(p, 3) for p in pts) > len(pts) // 3  # the table is in the comparison
@@ -461,26 +575,6 @@ class TestCIrradianceTable:
 # --------------------------------------------------------------------------- #
 # Engines: the generated skysh_engine_coefficients() against skysh.engines.convert
 # --------------------------------------------------------------------------- #
-ENGINE_HARNESS: str = r"""
-#include <stdio.h>
-#include SKYSH_HEADER
-int main(void) {
-    double ts, t, phi;
-    int gibbs, dering, table, p;
-    skysh_real out[SKYSH_ENGINE_COUNT];
-    while (scanf("%lf %lf %lf %d %d %d", &ts, &t, &phi, &gibbs, &dering, &table) == 6) {
-        int rc = skysh_engine_coefficients((skysh_real)ts, (skysh_real)t, (skysh_real)phi, gibbs, dering, 0, NULL, table,
-                                           out);
-        printf("%d", rc);
-        for (p = 0; p < SKYSH_ENGINE_COUNT; ++p)
-            printf(" %.17g", (double)out[p]);
-        printf("\n");
-    }
-    return 0;
-}
-"""
-
-
 def engine_table(p: tuple, bands: int) -> bool:
     """The runtime's irradiance_table for an engine at (ts, t, phi, gibbs[, dering[, table]]): engines light diffusely,
     so by intent the table at 3 bands without the Gibbs filter and with deringing (docs/engines.md)."""
@@ -507,18 +601,12 @@ def engine_points() -> list[tuple[float, float, float, int]]:
             for phi in (0.0, 0.9, -2.7, -12345.678) for g in (0, 1)]
 
 
-def run_engine_c(source: str, directory: Path, pts: list) -> tuple[np.ndarray, np.ndarray]:
-    assert CC is not None
-    (directory / "sky_sh.h").write_text(source)
-    (directory / "harness.c").write_text(ENGINE_HARNESS)
-    binary = directory / "harness"
-    result = subprocess.run(
-        [CC, "-std=c99", "-O2", "-Wall", "-Wextra", "-pedantic", "-Werror", '-DSKYSH_HEADER="sky_sh.h"',
-         "-o", str(binary), str(directory / "harness.c"), "-lm"], capture_output=True, text=True, check=False,
-    )
-    assert result.returncode == 0, result.stderr
-    text = "\n".join(f"{p[0]!r} {p[1]!r} {p[2]!r} {p[3]} {p[4] if p[4:] else 0} {p[5] if p[5:] else BY_INTENT}"
-                     for p in pts) + "\n"
+def run_engine_c(source: str, runs: ToolRuns, pts: list) -> tuple[np.ndarray, np.ndarray]:
+    """skysh_engine_coefficients of the header ``source`` at points (ts, t, phi, gibbs[, dering[, table]]):
+    (return codes, values)."""
+    binary = compile_harness(source, runs)
+    text = "\n".join(f"1 {p[0]!r} {p[1]!r} {p[2]!r} {p[3]} {p[4] if p[4:] else 0} 0 {NO_LIGHTS} "
+                     f"{p[5] if p[5:] else BY_INTENT}" for p in pts) + "\n"
     out = subprocess.run([str(binary)], input=text, capture_output=True, text=True, check=True).stdout.splitlines()
     rows = np.array([line.split() for line in out], dtype=np.float64)
     return rows[:, 0], rows[:, 1:]
@@ -527,20 +615,21 @@ def run_engine_c(source: str, directory: Path, pts: list) -> tuple[np.ndarray, n
 @pytest.mark.skipif(CC is None, reason="no C compiler on this machine")
 class TestCEngineExport:
     @pytest.mark.parametrize(("name", "bands"), engine_cases())
-    def test_matches_convert(self, sky: SkySH, name: str, bands: int, tmp_path: Path) -> None:
+    def test_matches_convert(self, sky: SkySH, exported: Exported, tool_runs: ToolRuns, name: str, bands: int) -> None:
         pts = engine_points()
-        codes, got = run_engine_c(export_source(sky, "c", bands=bands, engine=name), tmp_path, pts)
+        codes, got = run_engine_c(exported("c", bands=bands, engine=name), tool_runs, pts)
         ref, scale = engine_reference(sky, pts, name, bands)
         assert np.all(codes == 0) and got.shape == ref.shape
         assert float(np.abs(got - ref).max()) / scale < DOUBLE_TOLERANCE
 
     @pytest.mark.parametrize(("name", "bands"), engine_cases())
-    def test_negative_control_unconverted_fails(self, sky: SkySH, name: str, bands: int, tmp_path: Path) -> None:
-        """skysh's own radiance (the non-engine function of the same header) must fail the comparison."""
+    def test_negative_control_unconverted_fails(self, sky: SkySH, exported: Exported, tool_runs: ToolRuns, name: str,
+                                                bands: int) -> None:
+        """skysh's own radiance (the non-engine function of the same header and build) must fail the comparison."""
         if is_padded_identity(name, bands):
             pytest.skip(f"{name} at {bands} band(s) takes skysh's numbers as they are")
         pts = engine_points()[:8]
-        binary = compile_c(export_source(sky, "c", bands=bands, engine=name), tmp_path)
+        binary = compile_harness(exported("c", bands=bands, engine=name), tool_runs)
         codes, radiance = run_c(binary, [(ts, t, phi, g, 0) for ts, t, phi, g in pts])
         ref, scale = engine_reference(sky, pts, name, bands)
         assert np.all(codes == 0)
@@ -549,20 +638,20 @@ class TestCEngineExport:
         pasted[:, : flat.shape[1]] = flat
         assert float(np.abs(pasted - ref).max()) / scale > CONTROL_MARGIN * DOUBLE_TOLERANCE
 
-    def test_refuses_outside_the_domain(self, sky: SkySH, tmp_path: Path) -> None:
+    def test_refuses_outside_the_domain(self, exported: Exported, tool_runs: ToolRuns) -> None:
         if not engine_cases():
             pytest.skip("skysh.engines does not exist yet")
         name, bands = engine_cases()[-1]
         pts = [(-0.01, 3.0, 0.0, 1), (0.5, 6.01, 0.0, 1), (float("nan"), 3.0, 0.0, 0), (0.5, 3.0, float("inf"), 0)]
-        codes, got = run_engine_c(export_source(sky, "c", bands=bands, engine=name), tmp_path, pts)
+        codes, got = run_engine_c(exported("c", bands=bands, engine=name), tool_runs, pts)
         assert np.all(codes == -1) and np.all(got == 0.0)
 
-    def test_float_build(self, sky: SkySH, tmp_path: Path) -> None:
+    def test_float_build(self, sky: SkySH, exported: Exported, tool_runs: ToolRuns) -> None:
         if not engine_cases():
             pytest.skip("skysh.engines does not exist yet")
         name, bands = engine_cases()[-1]
         pts = [p for p in engine_points() if abs(p[2]) < 10.0]  # a float32 azimuth of 12345.678 is off by 1e-4 rad
-        codes, got = run_engine_c(export_source(sky, "c", bands=bands, engine=name, real="float"), tmp_path, pts)
+        codes, got = run_engine_c(exported("c", bands=bands, engine=name, real="float"), tool_runs, pts)
         ref, scale = engine_reference(sky, pts, name, bands)
         assert np.all(codes == 0)
         assert float(np.abs(got - ref).max()) / scale < FLOAT32_TOLERANCE
@@ -590,9 +679,9 @@ class TestEngineOtherLanguages:
         assert plan.shape == tuple(emap.shape) and plan.offset.size == np.prod(plan.shape)
 
     @pytest.mark.parametrize(("name", "bands"), engine_cases())
-    def test_json_plan_reproduces_convert(self, sky: SkySH, name: str, bands: int) -> None:
+    def test_json_plan_reproduces_convert(self, sky: SkySH, exported: Exported, name: str, bands: int) -> None:
         """The JSON's engine block, applied as its text says, to an independent evaluation of its tables."""
-        payload = json.loads(export_source(sky, "json", bands=bands, engine=name))
+        payload = json.loads(exported("json", bands=bands, engine=name))
         engine = payload["engine"]
         pts = engine_points()[::7]
         got = []
@@ -610,10 +699,10 @@ class TestEngineOtherLanguages:
 
     @pytest.mark.parametrize("language", ["glsl", "hlsl"])
     @pytest.mark.parametrize(("name", "bands"), engine_cases())
-    def test_shader_structure(self, sky: SkySH, language: str, name: str, bands: int, tmp_path: Path) -> None:
+    def test_shader_structure(self, exported: Exported, tool_runs: ToolRuns, language: str, name: str, bands: int) -> None:
         from skysh.export_js import engine_plan
 
-        source = export_source(sky, language, bands=bands, engine=name)
+        source = exported(language, bands=bands, engine=name)
         count = engine_plan(name, bands).offset.size
         assert f"#define SKYSH_ENGINE_COUNT {count}" in source
         assert "bool skysh_engine_coefficients(" in source
@@ -622,33 +711,15 @@ class TestEngineOtherLanguages:
             assert source.count(open_) == source.count(close)
         if GLSLANG is None:
             return
-        if language == "glsl":
-            shader = tmp_path / "sky.frag"
-            shader.write_text(
-                "#version 330\n" + source + "uniform vec4 params;\nout vec4 colour;\nvoid main() {\n"
-                "    float v[SKYSH_ENGINE_COUNT];\n    bool ok = skysh_engine_coefficients(params.x, params.y, params.z, "
-                "false, params.w > 0.0, true, vec3(0.2), SKYSH_BY_INTENT, v);\n"
-                "    colour = vec4(v[0], v[SKYSH_ENGINE_COUNT - 1], 0.0, ok ? 1.0 : 0.0);\n}\n"
-            )
-            command = [GLSLANG, str(shader)]
-        else:
-            shader = tmp_path / "sky.hlsl"
-            shader.write_text(
-                source + "float4 params;\nfloat4 main() : SV_Target {\n    float v[SKYSH_ENGINE_COUNT];\n"
-                "    bool ok = skysh_engine_coefficients(params.x, params.y, params.z, false, params.w > 0.0, true,\n"
-                "        float3(0.2, 0.2, 0.2), SKYSH_BY_INTENT, v);\n"
-                "    return float4(v[0], v[SKYSH_ENGINE_COUNT - 1], 0.0, ok ? 1.0 : 0.0);\n}\n"
-            )
-            command = [GLSLANG, "-D", "-V", "-e", "main", "-S", "frag", "-o", str(tmp_path / "sky.spv"), str(shader)]
-        result = subprocess.run(command, capture_output=True, text=True, check=False)
+        result = tool_runs.run(*glslang_job(engine_shader(source, language), language)).result
         assert result.returncode == 0, result.stdout + result.stderr
 
 
 class TestShaderExport:
     @pytest.mark.parametrize("language", ["glsl", "hlsl"])
     @pytest.mark.parametrize("bands", [1, 3, 7])
-    def test_structure(self, sky: SkySH, language: str, bands: int) -> None:
-        source = export_source(sky, language, bands=bands)
+    def test_structure(self, sky: SkySH, exported: Exported, language: str, bands: int) -> None:
+        source = exported(language, bands=bands)
         tables = export_tables(sky, bands)
         table = parse_shader_table(source)
         stored = tables.table  # one band: the unfiltered c_10 follows as row 1 (the ground's E_h)
@@ -664,40 +735,20 @@ class TestShaderExport:
         assert not re.search(r"\bdouble\b", source) and not re.search(r"^#version", source, re.MULTILINE)
 
     @pytest.mark.parametrize("bands", [1, 3, 7])
-    def test_float32_tables(self, sky: SkySH, bands: int) -> None:
-        assert shader_float32_table_error(sky, bands) < FLOAT32_TABLE_TOLERANCE
+    def test_float32_tables(self, sky: SkySH, exported: Exported, bands: int) -> None:
+        assert shader_float32_table_error(sky, exported("glsl", bands=bands), bands) < FLOAT32_TABLE_TOLERANCE
 
     @pytest.mark.skipif(GLSLANG is None, reason="glslangValidator not installed (Debian: glslang-tools)")
-    @pytest.mark.parametrize("version", ["330", "300 es"])
-    @pytest.mark.parametrize("bands", [1, 3, 7])
-    def test_glsl_compiles(self, sky: SkySH, bands: int, version: str, tmp_path: Path) -> None:
-        precision = "precision highp float;\n" if version.endswith("es") else ""
-        shader = tmp_path / "sky.frag"
-        shader.write_text(
-            f"#version {version}\n{precision}" + export_source(sky, "glsl", bands=bands)
-            + "uniform vec4 params;\nout vec4 colour;\nvoid main() {\n    vec3 c[SKYSH_COUNT];\n"
-            "    bool ok = skysh_coefficients(params.x, params.y, params.z, true, params.w > 0.0, false, false, vec3(0.0),\n"
-            "        SKYSH_BY_INTENT, c);\n"
-            "    colour = vec4(c[0] + c[SKYSH_COUNT - 1], ok ? 1.0 : 0.0);\n}\n"
-        )
-        result = subprocess.run([GLSLANG, str(shader)], capture_output=True, text=True, check=False)
+    @pytest.mark.parametrize("version", GLSL_VERSIONS)
+    @pytest.mark.parametrize("bands", SHADER_BANDS)
+    def test_glsl_compiles(self, exported: Exported, tool_runs: ToolRuns, bands: int, version: str) -> None:
+        result = tool_runs.run(*glslang_job(sky_shader(exported("glsl", bands=bands), version), "glsl")).result
         assert result.returncode == 0, result.stdout + result.stderr
 
     @pytest.mark.skipif(GLSLANG is None, reason="glslangValidator not installed (Debian: glslang-tools)")
-    @pytest.mark.parametrize("bands", [1, 3, 7])
-    def test_hlsl_compiles(self, sky: SkySH, bands: int, tmp_path: Path) -> None:
-        shader = tmp_path / "sky.hlsl"
-        shader.write_text(
-            export_source(sky, "hlsl", bands=bands)
-            + "float4 params;\nfloat4 main() : SV_Target {\n    float3 c[SKYSH_COUNT];\n"
-            "    bool ok = skysh_coefficients(params.x, params.y, params.z, true, params.w > 0.0, false, false,\n"
-            "        float3(0.0, 0.0, 0.0), SKYSH_BY_INTENT, c);\n"
-            "    return float4(c[0] + c[SKYSH_COUNT - 1], ok ? 1.0 : 0.0);\n}\n"
-        )
-        result = subprocess.run(
-            [GLSLANG, "-D", "-V", "-e", "main", "-S", "frag", "-o", str(tmp_path / "sky.spv"), str(shader)],
-            capture_output=True, text=True, check=False,
-        )
+    @pytest.mark.parametrize("bands", SHADER_BANDS)
+    def test_hlsl_compiles(self, exported: Exported, tool_runs: ToolRuns, bands: int) -> None:
+        result = tool_runs.run(*glslang_job(sky_shader(exported("hlsl", bands=bands), "hlsl"), "hlsl")).result
         assert result.returncode == 0, result.stdout + result.stderr
 
 
@@ -716,20 +767,20 @@ class TestShaderIrradianceTable:
     """The shaders' SKYSH_IRRADIANCE (float32, evaluated in double as documented) against the runtime's table."""
 
     @pytest.mark.parametrize("language", ["glsl", "hlsl"])
-    def test_round_trip_and_presence(self, sky: SkySH, language: str) -> None:
-        source = export_source(sky, language, bands=3)
+    def test_round_trip_and_presence(self, sky: SkySH, exported: Exported, language: str) -> None:
+        source = exported(language, bands=3)
         table = parse_shader_table(source, "SKYSH_IRRADIANCE")
         np.testing.assert_array_equal(table, export_tables(sky, 3).irradiance.reshape(-1, 3).astype(np.float32))
         assert "#define SKYSH_IRRADIANCE_TABLE 1" in source
         for bands in (1, 7):  # no table: irradianceTable 1 is refused, by intent is the sky's pipeline
-            other = export_source(sky, language, bands=bands)
+            other = exported(language, bands=bands)
             assert "#define SKYSH_IRRADIANCE_TABLE 0" in other and " SKYSH_IRRADIANCE[" not in other
 
     @pytest.mark.parametrize("language", ["glsl", "hlsl"])
-    def test_float32_table_matches_the_runtime(self, sky: SkySH, language: str) -> None:
+    def test_float32_table_matches_the_runtime(self, sky: SkySH, exported: Exported, language: str) -> None:
         """Radiance-equivalent and irradiance at the table points; the sky's own rows (SKYSH_TABLE) evaluated the
         same way miss the runtime's table (negative control)."""
-        source, tables = export_source(sky, language, bands=3), export_tables(sky, 3)
+        source, tables = exported(language, bands=3), export_tables(sky, 3)
         shape = tables.irradiance.shape
         table = parse_shader_table(source, "SKYSH_IRRADIANCE").astype(np.float64).reshape(shape)
         sky_rows = parse_shader_table(source).astype(np.float64).reshape(shape)
@@ -740,48 +791,30 @@ class TestShaderIrradianceTable:
             control = max(control, dc_relative_error(evaluate_table(sky_rows, tables, p, bool(p[4])), ref))
         assert worst < FLOAT32_TABLE_TOLERANCE < CONTROL_MARGIN * FLOAT32_TABLE_TOLERANCE < control
 
-    def test_float32_table_is_never_negative(self, sky: SkySH) -> None:
+    def test_float32_table_is_never_negative(self, sky: SkySH, exported: Exported) -> None:
         tables = export_tables(sky, 3)
-        table = parse_shader_table(export_source(sky, "glsl", bands=3), "SKYSH_IRRADIANCE").astype(np.float64)
+        table = parse_shader_table(exported("glsl", bands=3), "SKYSH_IRRADIANCE").astype(np.float64)
         rng = np.random.default_rng(1803)
         got = np.array([evaluate_table(table.reshape(tables.irradiance.shape), tables, (z, t, a), True) for z, t, a in
                         zip(rng.uniform(0.0, math.pi / 2.0, 1000), rng.uniform(2.5, 6.0, 1000), rng.uniform(-3.0, 3.0, 1000))])
         assert relative_minimum(got).min() >= 0.0
 
     @pytest.mark.skipif(GLSLANG is None, reason="glslangValidator not installed (Debian: glslang-tools)")
-    @pytest.mark.parametrize("version", ["330", "300 es", "hlsl"])
-    @pytest.mark.parametrize("engine", [None, "unity"])
-    def test_compiles_with_every_choice(self, sky: SkySH, version: str, engine: str | None, tmp_path: Path) -> None:
+    @pytest.mark.parametrize("version", CHOICE_VERSIONS)
+    @pytest.mark.parametrize("engine", CHOICE_ENGINES)
+    def test_compiles_with_every_choice(self, exported: Exported, tool_runs: ToolRuns, version: str, engine: str | None) -> None:
         """irradianceTable from a uniform (every value reaches the code), with and without an engine."""
-        glsl = version != "hlsl"
-        vec3, args = ("vec3", "params.x, params.y, params.z, false, true") if glsl else ("float3", "params.x, params.y, "
-                                                                                           "params.z, false, true")
-        call = (f"skysh_engine_coefficients({args}, false, {vec3}(0.2, 0.2, 0.2), int(params.w) - 1, v)" if engine
-                else f"skysh_coefficients({args}, true, false, {vec3}(0.2, 0.2, 0.2), int(params.w) - 1, c)")
-        decl = "float v[SKYSH_ENGINE_COUNT];" if engine else f"{vec3} c[SKYSH_COUNT];"
-        use = "v[0]" if engine else "c[0].x"
-        source = export_source(sky, "glsl" if glsl else "hlsl", bands=3, engine=engine)
-        if glsl:
-            precision = "precision highp float;\n" if version.endswith("es") else ""
-            shader = tmp_path / "sky.frag"
-            shader.write_text(f"#version {version}\n{precision}{source}uniform vec4 params;\nout vec4 colour;\n"
-                              f"void main() {{\n    {decl}\n    bool ok = {call};\n"
-                              f"    colour = vec4({use}, 0.0, 0.0, ok ? 1.0 : 0.0);\n}}\n")
-            command = [GLSLANG, str(shader)]
-        else:
-            shader = tmp_path / "sky.hlsl"
-            shader.write_text(f"{source}float4 params;\nfloat4 main() : SV_Target {{\n    {decl}\n    bool ok = {call};\n"
-                              f"    return float4({use}, 0.0, 0.0, ok ? 1.0 : 0.0);\n}}\n")
-            command = [GLSLANG, "-D", "-V", "-e", "main", "-S", "frag", "-o", str(tmp_path / "sky.spv"), str(shader)]
-        done = subprocess.run(command, capture_output=True, text=True, check=False)
-        assert done.returncode == 0, done.stdout + done.stderr
+        language = "hlsl" if version == "hlsl" else "glsl"
+        shader = choice_shader(exported(language, bands=3, engine=engine), version, engine)
+        result = tool_runs.run(*glslang_job(shader, language)).result
+        assert result.returncode == 0, result.stdout + result.stderr
 
 
 class TestJsonIrradianceTable:
-    def test_block_matches_the_runtime(self, sky: SkySH) -> None:
+    def test_block_matches_the_runtime(self, sky: SkySH, exported: Exported) -> None:
         """The block's table evaluated as its text says (radiance-equivalent and irradiance) against the runtime's
         irradiance_table=True; the sky's own table in its place misses (negative control)."""
-        payload = json.loads(export_source(sky, "json", bands=3))
+        payload = json.loads(exported("json", bands=3))
         block = payload["irradiance_table"]
         assert block["available"] and "by intent" in block["rule"]
         table, sky_rows = np.array(block["table"]), np.array(payload["table"])
@@ -793,14 +826,14 @@ class TestJsonIrradianceTable:
         assert worst < DOUBLE_TOLERANCE < CONTROL_MARGIN * DOUBLE_TOLERANCE < control
 
     @pytest.mark.parametrize("bands", [1, 7])
-    def test_other_band_counts_have_none(self, sky: SkySH, bands: int) -> None:
-        block = json.loads(export_source(sky, "json", bands=bands))["irradiance_table"]
+    def test_other_band_counts_have_none(self, exported: Exported, bands: int) -> None:
+        block = json.loads(exported("json", bands=bands))["irradiance_table"]
         assert not block["available"] and "table" not in block
 
     @pytest.mark.parametrize("name", [name for name, bands in engine_cases() if bands == 3])
-    def test_engine_plan_on_the_table(self, sky: SkySH, name: str) -> None:
+    def test_engine_plan_on_the_table(self, sky: SkySH, exported: Exported, name: str) -> None:
         """The JSON engine block applied to the table's radiance-equivalent: engines.convert of the runtime's."""
-        payload = json.loads(export_source(sky, "json", bands=3, engine=name))
+        payload = json.loads(exported("json", bands=3, engine=name))
         engine, table = payload["engine"], np.array(payload["irradiance_table"]["table"])
         pts = [p for p in engine_points() if not p[3]][::3]
         factor = np.array(engine["band_factor"])[sh.band_of_index(3)][:, None]
@@ -812,8 +845,8 @@ class TestJsonIrradianceTable:
 
 class TestJsonExport:
     @pytest.mark.parametrize("bands", [1, 4, 7])
-    def test_independent_evaluation_matches_runtime(self, sky: SkySH, bands: int) -> None:
-        payload = json.loads(export_source(sky, "json", bands=bands))
+    def test_independent_evaluation_matches_runtime(self, sky: SkySH, exported: Exported, bands: int) -> None:
+        payload = json.loads(exported("json", bands=bands))
         assert payload["bands"] == bands and payload["format"] == "skysh-export"
         table = np.array(payload["table"])
         assert table.shape == (payload["degrees"][0] + 1, payload["degrees"][1] + 1, bands * (bands + 1) // 2, 3)
@@ -881,35 +914,36 @@ def figures() -> list[dict]:
 
     sky = SkySH.load()
     rows = []
-    for bands in (1, 3, 7):
-        if CC is not None:
-            for real in ("double", "float"):
-                with tempfile.TemporaryDirectory() as directory:
-                    rows.append({"export": f"c ({real})", "bands": bands, "error": c_error(sky, bands, real, Path(directory))})
-        rows.append({"export": "glsl/hlsl float32 tables, double arithmetic", "bands": bands,
-                     "error": shader_float32_table_error(sky, bands)})
-    return rows + table_figures(sky)
+    with tempfile.TemporaryDirectory() as directory:
+        runs = ToolRuns(Path(directory))
+        for bands in (1, 3, 7):
+            if CC is not None:
+                for real in ("double", "float"):
+                    error = c_error(sky, export_source(sky, "c", bands=bands, real=real), bands, runs)
+                    rows.append({"export": f"c ({real})", "bands": bands, "error": error})
+            rows.append({"export": "glsl/hlsl float32 tables, double arithmetic", "bands": bands,
+                         "error": shader_float32_table_error(sky, export_source(sky, "glsl", bands=bands), bands)})
+        rows += table_figures(sky, runs)
+        runs.close()
+    return rows
 
 
-def table_figures(sky: SkySH) -> list[dict]:
+def table_figures(sky: SkySH, runs: ToolRuns) -> list[dict]:
     """The irradiance table's figures: every setting of irradiance_table against the runtime (C), the shaders'
     float32 table in double arithmetic, and the least exact minimum over the mean of the exported table."""
-    import tempfile
-
     rows = []
     pts = table_points()
     if CC is not None:
         for real in ("double", "float"):
-            with tempfile.TemporaryDirectory() as directory:
-                binary = compile_c(export_source(sky, "c", bands=3, real=real), Path(directory))
-                chosen = [p for p in pts if real == "double" or abs(p[2]) < 10.0]
-                rows.append({"export": f"c ({real}), every irradiance_table setting", "bands": 3, "points": len(chosen),
-                             "error": table_error(sky, binary, chosen, 3)[0]})
-                rng = np.random.default_rng(1802)
-                frames = zip(rng.uniform(0.0, math.pi / 2.0, NONNEGATIVE_POINTS), rng.uniform(2.5, 6.0, NONNEGATIVE_POINTS))
-                _, table = run_c(binary, [(float(z), float(t), 0.3, 0, 1, 1, BY_INTENT) for z, t in frames])
-                rows.append({"export": f"c ({real}) tabulated irradiance", "measure": "least exact minimum / mean",
-                             "points": NONNEGATIVE_POINTS, "value": float(relative_minimum(table).min())})
+            binary = compile_harness(export_source(sky, "c", bands=3, real=real), runs)
+            chosen = [p for p in pts if real == "double" or abs(p[2]) < 10.0]
+            rows.append({"export": f"c ({real}), every irradiance_table setting", "bands": 3, "points": len(chosen),
+                         "error": table_error(sky, binary, chosen, 3)[0]})
+            rng = np.random.default_rng(1802)
+            frames = zip(rng.uniform(0.0, math.pi / 2.0, NONNEGATIVE_POINTS), rng.uniform(2.5, 6.0, NONNEGATIVE_POINTS))
+            _, table = run_c(binary, [(float(z), float(t), 0.3, 0, 1, 1, BY_INTENT) for z, t in frames])
+            rows.append({"export": f"c ({real}) tabulated irradiance", "measure": "least exact minimum / mean",
+                         "points": NONNEGATIVE_POINTS, "value": float(relative_minimum(table).min())})
     tables = export_tables(sky, 3)
     table = parse_shader_table(export_source(sky, "glsl", bands=3), "SKYSH_IRRADIANCE").astype(np.float64)
     worst = max(dc_relative_error(evaluate_table(table.reshape(tables.irradiance.shape), tables, p, bool(p[4])),

@@ -19,29 +19,44 @@ fail the same comparisons; without deringing the sum dips below 0.
 Error measure: as ``tests/test_export.py`` (largest |export - runtime| over |DC| of the same
 channel, worst channel); the sun's light: |direction| difference, and the RGB difference over
 the largest channel. ``python tests/test_export_lights.py`` prints the measured figures.
+
+Compiles and validations go through the session's :class:`conftest.ToolRuns` (each distinct
+one once: the harness, :data:`C_HARNESS`, is also tests/test_export.py's, so the builds of the
+same headers are shared in one process); the module queues them all when it starts (:func:`_prefetch`).
 """
 
 from __future__ import annotations
 
+import copy
+import dataclasses
 import json
 import math
 import re
 import shutil
 import subprocess
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
-from conftest import dc_relative_error
+from conftest import (
+    GLSLANG,
+    PLAIN_DIP,
+    RUN_DIR,
+    Exported,
+    ToolJob,
+    ToolRuns,
+    dc_relative_error,
+    glslang_job,
+    prefetch_runs,
+    selected_names,
+)
 
 from skysh import SkySH, preetham, sh, shmin
 from skysh.export import export_source, export_tables
 from skysh.export_lights import BY_INTENT, embed_table, float32_literal, light_tables
-
-CC: str | None = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
-GLSLANG: str | None = shutil.which("glslangValidator")
 
 DOUBLE_TOLERANCE: float = 1e-12
 """The double C build against the runtime: the same arithmetic up to the Chebyshev recurrence, the order of
@@ -61,10 +76,6 @@ NONNEGATIVE_FLOOR: float = -1e-9
 """Sun + dering: the irradiance over the sphere must stay above this times the irradiance DC (rounding of
 a sum that touches 0 where the window is tight)."""
 
-PLAIN_DIP: float = -1e-3
-"""Sun without deringing: the irradiance's minimum over the sphere (of the DC) must fall below this for the
-non-negativity check to be able to fail: the size of the table's own margin (1e-3 of the mean), with sign flipped."""
-
 WINDOWED_TRIG_TOL: float = 1e-14
 """The exported trig matrix against sh.basis times the window, absolute: values below 1 (the largest is about
 0.6) formed as an 8-term sum of cos(k ts), sin(k ts) times matrix entries whose absolute row sums are below 1,
@@ -73,18 +84,37 @@ so a few roundings of unit-size terms (eps 2.2e-16 each)."""
 RANDOM_POINTS: int = 240
 """Random frames per build (each with its own flags and albedo)."""
 
-HARNESS: str = r"""
+CC: str | None = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
+"""The machine's C compiler, or None: the C export tests skip without it."""
+
+C_HARNESS: str = r"""
 #include <stdio.h>
 #include SKYSH_HEADER
 int main(void) {
     double ts, t, phi, a[3];
-    int gibbs, dering, irradiance, sun, null_albedo, table, i, c;
+    int engine, gibbs, dering, irradiance, sun, null_albedo, table, i, c;
     skysh_real out[SKYSH_COUNT][3], albedo[3], direction[3], rgb[3];
-    while (scanf("%lf %lf %lf %d %d %d %d %d %lf %lf %lf %d", &ts, &t, &phi, &gibbs, &dering, &irradiance, &sun,
-                 &null_albedo, a, a + 1, a + 2, &table) == 12) {
+#ifdef SKYSH_ENGINE_COUNT
+    skysh_real values[SKYSH_ENGINE_COUNT];
+#endif
+    while (scanf("%d %lf %lf %lf %d %d %d %d %d %lf %lf %lf %d", &engine, &ts, &t, &phi, &gibbs, &dering, &irradiance,
+                 &sun, &null_albedo, a, a + 1, a + 2, &table) == 13) {
         int rc, rs;
         for (c = 0; c < 3; ++c)
             albedo[c] = (skysh_real)a[c];
+        if (engine) {
+#ifdef SKYSH_ENGINE_COUNT
+            rc = skysh_engine_coefficients((skysh_real)ts, (skysh_real)t, (skysh_real)phi, gibbs, dering, sun,
+                                           null_albedo ? NULL : albedo, table, values);
+            printf("%d", rc);
+            for (i = 0; i < SKYSH_ENGINE_COUNT; ++i)
+                printf(" %.17g", (double)values[i]);
+            printf("\n");
+            continue;
+#else
+            return 2; /* an engine line for a header without an engine */
+#endif
+        }
         rc = skysh_coefficients((skysh_real)ts, (skysh_real)t, (skysh_real)phi, gibbs, dering, irradiance, sun,
                                 null_albedo ? NULL : albedo, table, out);
         rs = skysh_sun_light((skysh_real)ts, (skysh_real)t, (skysh_real)phi, direction, rgb);
@@ -101,6 +131,26 @@ int main(void) {
     return 0;
 }
 """
+"""The C export tests' program around a header (here and in tests/test_export.py): each input line
+``engine ts t phi gibbs dering irradiance sun null_albedo a_r a_g a_b irradiance_table`` calls, for engine 0,
+skysh_coefficients (ground albedo NULL when null_albedo) and skysh_sun_light, printing both return codes, the sun's
+direction and RGB and the SKYSH_COUNT x 3 coefficients (8 + 3 SKYSH_COUNT numbers); for engine 1 (a header with an
+engine) skysh_engine_coefficients (irradiance unused), printing its code and the SKYSH_ENGINE_COUNT values."""
+
+
+def c_harness_job(source: str) -> ToolJob:
+    """The build of :data:`C_HARNESS` around the header ``source`` with :data:`CC`: C99, -O2, every warning an error."""
+    assert CC is not None
+    return ([CC, "-std=c99", "-O2", "-Wall", "-Wextra", "-pedantic", "-Werror", '-DSKYSH_HEADER="sky_sh.h"', "-o",
+             f"{RUN_DIR}/harness", f"{RUN_DIR}/harness.c", "-lm"], {"sky_sh.h": source, "harness.c": C_HARNESS})
+
+
+def compile_harness(source: str, runs: ToolRuns) -> Path:
+    """The :data:`C_HARNESS` program of the header ``source`` (built once per session by ``runs``)."""
+    done = runs.run(*c_harness_job(source))
+    assert done.result.returncode == 0, done.result.stderr
+    return done.directory / "harness"
+
 
 BUILDS: dict[str, tuple[int, str]] = {"1": (1, "double"), "3": (3, "double"), "7": (7, "double"), "3f": (3, "float")}
 """Header builds compiled once per module: name -> (bands, C real type)."""
@@ -117,29 +167,17 @@ def table_of(p: Point) -> int:
     return p[9] if len(p) > 9 else BY_INTENT
 
 
-def compile_header(source: str, directory: Path, name: str) -> Path:
-    assert CC is not None
-    (directory / f"{name}.h").write_text(source)
-    (directory / f"{name}.c").write_text(HARNESS)
-    binary = directory / name
-    done = subprocess.run(
-        [CC, "-std=c99", "-O2", "-Wall", "-Wextra", "-pedantic", "-Werror", f'-DSKYSH_HEADER="{name}.h"', "-o",
-         str(binary), str(directory / f"{name}.c"), "-lm"], capture_output=True, text=True, check=False)
-    assert done.returncode == 0, done.stderr
-    return binary
-
-
 @pytest.fixture(scope="module")
-def binaries(sky: SkySH, tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+def binaries(exported: Exported, tool_runs: ToolRuns) -> dict[str, Path]:
     if CC is None:
         pytest.skip("no C compiler on this machine")
-    directory = tmp_path_factory.mktemp("lights")
-    return {name: compile_header(export_source(sky, "c", bands=bands, real=real), directory, f"sky{name}")
-            for name, (bands, real) in BUILDS.items()}
+    return {name: compile_harness(exported("c", bands=bands, real=real), tool_runs) for name, (bands, real) in BUILDS.items()}
 
 
 def run(binary: Path, pts: list[Point]) -> list[np.ndarray]:
-    lines = [f"{p[0]!r} {p[1]!r} {p[2]!r} {p[3]} {p[4]} {p[5]} {p[6]} {p[7]} " + " ".join(map(repr, p[8]))
+    """The harness ``binary`` (:data:`C_HARNESS`) at ``pts``: per point (rc, sun rc, sun direction (3), sun RGB (3),
+    coefficients (SKYSH_COUNT x 3, flat))."""
+    lines = [f"0 {p[0]!r} {p[1]!r} {p[2]!r} {p[3]} {p[4]} {p[5]} {p[6]} {p[7]} " + " ".join(map(repr, p[8]))
              + f" {table_of(p)}" for p in pts]
     out = subprocess.run([str(binary)], input="\n".join(lines) + "\n", capture_output=True, text=True, check=True)
     return [np.array(line.split(), dtype=np.float64) for line in out.stdout.splitlines()]
@@ -177,6 +215,86 @@ def errors(sky: SkySH, binary: Path, bands: int, pts: list[Point]) -> tuple[floa
         direction_error = max(direction_error, float(np.abs(row[2:5] - d).max()))
         rgb_error = max(rgb_error, float(np.abs(row[5:8] - rgb).max() / np.abs(rgb).max()))
     return worst, direction_error, rgb_error
+
+
+MUTATIONS: list[str] = ["ground without the Gibbs filter", "sun colour not clamped", "ground lit by the table's c_10"]
+"""The negative controls' changes to the 3-band header (:func:`mutate`)."""
+
+
+def mutate(source: str, mutation: str) -> str:
+    """The C header ``source`` with one of :data:`MUTATIONS` (unchanged if its code is not found)."""
+    if mutation.startswith("ground without"):
+        return source.replace("(gibbs ? SKYSH_GIBBS[l] : 1.0)", "(gibbs ? 1.0 : 1.0)")
+    if mutation.startswith("ground lit"):  # the table's rows summed before the sky's E_h is taken from row 1
+        start = source.index("\n    if (table) /* step 3 from the certified")
+        step = source[start:source.index("\n    for (l = 0; l < SKYSH_BANDS")]
+        e_sky = "\n    for (c = 0; c < 3; ++c)\n        e_sky[c] ="
+        return source.replace(step, "").replace(e_sky, step + e_sky)
+    return source.replace("rgb[c] = rgb[c] > 0.0 ? rgb[c] : 0.0;", "")
+
+
+def without(sky: SkySH, table: str) -> SkySH:
+    """An in-memory copy of ``sky`` without its table ``table`` ("sun", "irradiance"), in the data and the metadata."""
+    metadata = copy.deepcopy(sky.table.metadata)
+    metadata.get("tables", {}).pop(table, None)
+    return SkySH(dataclasses.replace(sky.table, metadata=metadata,
+                                     tables={k: v for k, v in sky.table.tables.items() if k != table}))
+
+
+@pytest.fixture(scope="module")
+def sunless(sky: SkySH) -> tuple[SkySH, str]:
+    """The sky without the sun table, and its 3-band C export."""
+    reduced = without(sky, "sun")
+    return reduced, export_source(reduced, "c", bands=3)
+
+
+@pytest.fixture(scope="module")
+def bare(sky: SkySH) -> tuple[SkySH, str]:
+    """The sky without the irradiance table, and its 3-band C export."""
+    reduced = without(sky, "irradiance")
+    return reduced, export_source(reduced, "c", bands=3)
+
+
+def shader(exported: Exported, version: str, bands: int) -> tuple[str, str]:
+    """(language, fragment shader) calling skysh_coefficients with the sun and the ground and skysh_sun_light of the
+    ``bands``-band export, for GLSL ``version`` or "hlsl"."""
+    if version == "hlsl":
+        return "hlsl", exported("hlsl", bands=bands) + SHADER_MAIN["hlsl"]
+    precision = "precision highp float;\n" if version.endswith("es") else ""
+    return "glsl", f"#version {version}\n{precision}" + exported("glsl", bands=bands) + SHADER_MAIN["glsl"]
+
+
+SHADER_VERSIONS: list[str] = ["330", "300 es", "hlsl"]
+"""The shader targets compiled (GLSL desktop and ES, HLSL)."""
+
+SHADER_BANDS: list[int] = [1, 3]
+"""Band counts of the shader exports tested (one band: the unfiltered c_10 row; three: dering and the table)."""
+
+
+def jobs(request: pytest.FixtureRequest, exported: Exported) -> Iterator[ToolJob]:
+    """The compiles and validations of the module's selected tests, in the order the tests run."""
+    wanted = selected_names(request)
+    if CC is not None:
+        if "TestC" in wanted:
+            yield from (c_harness_job(exported("c", bands=bands, real=real)) for bands, real in BUILDS.values())
+        if "test_negative_controls_fail" in wanted:
+            yield from (c_harness_job(mutate(exported("c", bands=3), mutation)) for mutation in MUTATIONS)
+        if "test_without_the_sun_table_the_sun_is_refused" in wanted:
+            yield c_harness_job(request.getfixturevalue("sunless")[1])
+        if "test_without_the_irradiance_table" in wanted:
+            yield c_harness_job(request.getfixturevalue("bare")[1])
+    if GLSLANG is not None and "test_compiles_with_the_sun_and_the_ground" in wanted:
+        for bands in SHADER_BANDS:
+            for version in SHADER_VERSIONS:
+                language, text = shader(exported, version, bands)
+                yield glslang_job(text, language)
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _prefetch(request: pytest.FixtureRequest, exported: Exported, tool_runs: ToolRuns) -> None:
+    """Queue the module's compiles and validations when it starts (conftest.ToolRuns): they run in the background
+    while the tests compare numbers; each test takes its own when it needs it (or builds it then)."""
+    prefetch_runs(tool_runs, jobs(request, exported))
 
 
 # --------------------------------------------------------------------------- #
@@ -225,24 +343,18 @@ class TestC:
         black, null = run(binaries["3"], pts)
         np.testing.assert_array_equal(black, null)
 
-    @pytest.mark.parametrize("mutation", ["ground without the Gibbs filter", "sun colour not clamped",
-                                          "ground lit by the table's c_10"])
-    def test_negative_controls_fail(self, sky: SkySH, mutation: str, tmp_path: Path) -> None:
-        source = export_source(sky, "c", bands=3)
+    @pytest.mark.parametrize("mutation", MUTATIONS)
+    def test_negative_controls_fail(self, sky: SkySH, exported: Exported, tool_runs: ToolRuns, mutation: str) -> None:
+        source = exported("c", bands=3)
+        mutated = mutate(source, mutation)
         if mutation.startswith("ground without"):
-            mutated = source.replace("(gibbs ? SKYSH_GIBBS[l] : 1.0)", "(gibbs ? 1.0 : 1.0)")
             pts: list[Point] = [(0.3 + 0.1 * k, 3.0 + 0.2 * k, 0.5 * k, 1, 0, 0, 0, 0, (0.5, 0.4, 0.3)) for k in range(8)]
-        elif mutation.startswith("ground lit"):  # the table's rows summed before the sky's E_h is taken from row 1
-            start = source.index("\n    if (table) /* step 3 from the certified")
-            step = source[start:source.index("\n    for (l = 0; l < SKYSH_BANDS")]
-            e_sky = "\n    for (c = 0; c < 3; ++c)\n        e_sky[c] ="
-            mutated = source.replace(step, "").replace(e_sky, step + e_sky)
+        elif mutation.startswith("ground lit"):
             pts = [(0.3 + 0.1 * k, 3.0 + 0.2 * k, 0.5 * k, 0, 1, 1, 0, 0, (0.5, 0.4, 0.3), BY_INTENT) for k in range(8)]
         else:
-            mutated = source.replace("rgb[c] = rgb[c] > 0.0 ? rgb[c] : 0.0;", "")
             pts = [(math.pi / 2.0 - 0.002 * k, 2.5 + 0.5 * k, 0.5 * k, 0, 0, 0, 1, 0, (0.0,) * 3) for k in range(8)]
         assert mutated != source
-        binary = compile_header(mutated, tmp_path, "mutated")
+        binary = compile_harness(mutated, tool_runs)
         worst = max(dc_relative_error(row[8:].reshape(-1, 3), reference(sky, p, 3)) for p, row in zip(pts, run(binary, pts)))
         assert worst > CONTROL_MARGIN * DOUBLE_TOLERANCE, mutation
 
@@ -272,9 +384,9 @@ SHADER_MAIN: dict[str, str] = {
 
 class TestShaders:
     @pytest.mark.parametrize("language", ["glsl", "hlsl"])
-    @pytest.mark.parametrize("bands", [1, 3])
-    def test_tables_round_trip_in_float32(self, sky: SkySH, language: str, bands: int) -> None:
-        source = export_source(sky, language, bands=bands)
+    @pytest.mark.parametrize("bands", SHADER_BANDS)
+    def test_tables_round_trip_in_float32(self, sky: SkySH, exported: Exported, language: str, bands: int) -> None:
+        source = exported(language, bands=bands)
         lights = export_tables(sky, bands).lights
         for name, values in (("SKYSH_SUN_TABLE", lights.sun_table), ("SKYSH_SUN_RGB", lights.rgb_from_xyz),
                              ("SKYSH_SUN_TRIG", lights.windowed_trig()), ("SKYSH_GROUND", lights.ground_zonal)):
@@ -282,20 +394,12 @@ class TestShaders:
         assert "skysh_sun_light(" in source and "#define SKYSH_LIGHTS 3" in source
 
     @pytest.mark.skipif(GLSLANG is None, reason="glslangValidator not installed (Debian: glslang-tools)")
-    @pytest.mark.parametrize("version", ["330", "300 es", "hlsl"])
-    @pytest.mark.parametrize("bands", [1, 3])
-    def test_compiles_with_the_sun_and_the_ground(self, sky: SkySH, version: str, bands: int, tmp_path: Path) -> None:
-        if version == "hlsl":
-            shader = tmp_path / "sky.hlsl"
-            shader.write_text(export_source(sky, "hlsl", bands=bands) + SHADER_MAIN["hlsl"])
-            command = [GLSLANG, "-D", "-V", "-e", "main", "-S", "frag", "-o", str(tmp_path / "sky.spv"), str(shader)]
-        else:
-            shader = tmp_path / "sky.frag"
-            precision = "precision highp float;\n" if version.endswith("es") else ""
-            shader.write_text(f"#version {version}\n{precision}" + export_source(sky, "glsl", bands=bands)
-                              + SHADER_MAIN["glsl"])
-            command = [GLSLANG, str(shader)]
-        done = subprocess.run(command, capture_output=True, text=True, check=False)
+    @pytest.mark.parametrize("version", SHADER_VERSIONS)
+    @pytest.mark.parametrize("bands", SHADER_BANDS)
+    def test_compiles_with_the_sun_and_the_ground(self, exported: Exported, tool_runs: ToolRuns, version: str,
+                                                  bands: int) -> None:
+        language, text = shader(exported, version, bands)
+        done = tool_runs.run(*glslang_job(text, language)).result
         assert done.returncode == 0, done.stdout + done.stderr
 
 
@@ -343,8 +447,8 @@ def json_lights(payload: dict[str, Any], p: Point) -> tuple[np.ndarray, np.ndarr
 
 class TestJson:
     @pytest.mark.parametrize("bands", [1, 3])
-    def test_independent_evaluation_matches_the_runtime(self, sky: SkySH, bands: int) -> None:
-        payload = json.loads(export_source(sky, "json", bands=bands))
+    def test_independent_evaluation_matches_the_runtime(self, sky: SkySH, exported: Exported, bands: int) -> None:
+        payload = json.loads(exported("json", bands=bands))
         assert payload["sun"]["available"] and payload["ground"]["available"]
         pts = [q for q in random_points(bands, 60) if not q[4] and not q[5]]  # by intent: the sky's rows
         assert sum(table_of(q) == 1 for q in pts) > 3 or bands != 3  # the table's radiance-equivalent with the lights
@@ -384,43 +488,29 @@ class TestGenerator:
         assert embed_table("js", "T", [[1.0, 2.0]]).startswith("const T = new Float64Array([\n    1.0, 2.0\n")
 
     @pytest.mark.skipif(CC is None, reason="no C compiler on this machine")
-    def test_without_the_sun_table_the_sun_is_refused(self, sky: SkySH, tmp_path: Path) -> None:
+    def test_without_the_sun_table_the_sun_is_refused(self, sunless: tuple[SkySH, str], tool_runs: ToolRuns) -> None:
         """An in-memory SkyTable without the sun table exports; the sun is refused (-4), the ground still works."""
-        import copy
-        import dataclasses
-
-        metadata = copy.deepcopy(sky.table.metadata)
-        metadata.get("tables", {}).pop("sun", None)
-        sunless = SkySH(dataclasses.replace(sky.table, metadata=metadata,
-                                            tables={k: v for k, v in sky.table.tables.items() if k != "sun"}))
-        source = export_source(sunless, "c", bands=3)
+        reduced, source = sunless
         assert "#define SKYSH_LIGHTS 2" in source
         pts: list[Point] = [(0.5, 3.0, 0.0, 0, 0, 0, 1, 0, (0.0,) * 3), (0.5, 3.0, 0.4, 1, 0, 0, 0, 0, (0.2, 0.3, 0.4))]
-        refused, ground = run(compile_header(source, tmp_path, "sunless"), pts)
+        refused, ground = run(compile_harness(source, tool_runs), pts)
         assert refused[0] == -4 and refused[1] == -4 and np.all(refused[2:] == 0.0)
-        assert ground[0] == 0 and dc_relative_error(ground[8:].reshape(-1, 3), reference(sunless, pts[1], 3)) < DOUBLE_TOLERANCE
+        assert ground[0] == 0 and dc_relative_error(ground[8:].reshape(-1, 3), reference(reduced, pts[1], 3)) < DOUBLE_TOLERANCE
 
     @pytest.mark.skipif(CC is None, reason="no C compiler on this machine")
-    def test_without_the_irradiance_table(self, sky: SkySH, tmp_path: Path) -> None:
+    def test_without_the_irradiance_table(self, sky: SkySH, bare: tuple[SkySH, str], tool_runs: ToolRuns) -> None:
         """An in-memory SkyTable without the irradiance table exports: by intent the old pipeline (as the runtime's
         default then), irradiance_table 1 refused (-5) as the runtime refuses it."""
-        import copy
-        import dataclasses
-
-        metadata = copy.deepcopy(sky.table.metadata)
-        metadata.get("tables", {}).pop("irradiance", None)
-        bare = SkySH(dataclasses.replace(sky.table, metadata=metadata,
-                                         tables={k: v for k, v in sky.table.tables.items() if k != "irradiance"}))
-        source = export_source(bare, "c", bands=3)
-        assert "#define SKYSH_IRRADIANCE_TABLE 0" in source and export_tables(bare, 3).irradiance is None
+        reduced, source = bare
+        assert "#define SKYSH_IRRADIANCE_TABLE 0" in source and export_tables(reduced, 3).irradiance is None
         pts: list[Point] = [(0.5, 3.0, 0.4, 0, 1, 1, 1, 0, (0.2, 0.3, 0.4), BY_INTENT),
                             (0.5, 3.0, 0.4, 0, 1, 1, 0, 0, (0.0,) * 3, 1)]
-        intent, refused = run(compile_header(source, tmp_path, "bare"), pts)
-        assert intent[0] == 0 and dc_relative_error(intent[8:].reshape(-1, 3), reference(bare, pts[0], 3)) < DOUBLE_TOLERANCE
+        intent, refused = run(compile_harness(source, tool_runs), pts)
+        assert intent[0] == 0 and dc_relative_error(intent[8:].reshape(-1, 3), reference(reduced, pts[0], 3)) < DOUBLE_TOLERANCE
         assert dc_relative_error(intent[8:].reshape(-1, 3), reference(sky, pts[0], 3)) > CONTROL_MARGIN * DOUBLE_TOLERANCE
         assert refused[0] == -5 and np.all(refused[8:] == 0.0)
         with pytest.raises(ValueError, match="irradiance_table"):
-            reference(bare, pts[1], 3)
+            reference(reduced, pts[1], 3)
 
     def test_light_tables_refuses_bad_bands(self, sky: SkySH) -> None:
         for bands in (0, 8, 2.5):
@@ -437,12 +527,14 @@ def figures() -> list[dict[str, Any]]:
     if CC is None:
         return rows
     with tempfile.TemporaryDirectory() as name:
-        for build, (bands, real) in BUILDS.items():
-            binary = compile_header(export_source(sky, "c", bands=bands, real=real), Path(name), f"sky{build}")
+        runs = ToolRuns(Path(name))
+        for bands, real in BUILDS.values():
+            binary = compile_harness(export_source(sky, "c", bands=bands, real=real), runs)
             pts = random_points(bands) if real == "double" else [p for p in random_points(bands, 120) if abs(p[2]) < 10]
             worst, direction, rgb = errors(sky, binary, bands, pts)
             rows.append({"export": f"c ({real})", "bands": bands, "points": len(pts), "coefficients_over_dc": worst,
                          "sun_direction": direction, "sun_rgb_over_max": rgb})
+        runs.close()
     return rows
 
 

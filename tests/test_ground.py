@@ -64,6 +64,13 @@ direct integral of L cos(theta) with a 4x denser sun-adapted rule."""
 ZONAL_BANDS: int = 16
 """Bands checked against the quadrature (the closed form is tabulated to 64)."""
 
+LINEAR_ARGUMENTS = {"bands": st.integers(2, 12), "lg": st.floats(0.0, 1e5), "theta": st.floats(0.0, math.pi),
+                    "phi": st.floats(-3.2, 3.2)}
+LINEAR_EXAMPLES: dict[str, int] = {"core": 15, "slow": 50}
+"""Hypothesis examples of TestGroundIrradiance's linear-and-exact property in the core run (``-m "not slow"``) and
+in its ``slow`` twin; the core also checks the SH irradiance's exactness at 503 normals for 2..7 bands
+(test_sh_irradiance_is_exact_for_two_or_more_bands)."""
+
 
 def lower_hemisphere_rule(n_z: int, n_phi: int) -> tuple[np.ndarray, np.ndarray]:
     """Gauss-Legendre in z on [-1, 0] x uniform azimuth: exact for Y_lm (l < n_z, |m| < n_phi)."""
@@ -156,12 +163,22 @@ class TestGroundIrradiance:
         n = np.array([s, 0.0, c])
         assert ground.ground_irradiance([1.0], n)[0] == pytest.approx(total, rel=VIEW_FACTOR_RTOL, abs=VIEW_FACTOR_ATOL)
 
-    @settings(max_examples=50, deadline=None)
-    @given(bands=st.integers(2, 12), lg=st.floats(0.0, 1e5), theta=st.floats(0.0, math.pi), phi=st.floats(-3.2, 3.2))
-    def test_property_linear_and_exact(self, bands: int, lg: float, theta: float, phi: float) -> None:
+    @staticmethod
+    def _linear_and_exact(bands: int, lg: float, theta: float, phi: float) -> None:
         n = np.array([math.sin(theta) * math.cos(phi), math.sin(theta) * math.sin(phi), math.cos(theta)])
         e = sh.evaluate(sh.irradiance(ground.ground_sh([lg], bands)), n)[0]
         assert e == pytest.approx(math.pi * lg * (1 - n[2]) / 2, rel=PROPERTY_RTOL, abs=PROPERTY_RTOL * max(lg, 1.0))
+
+    @settings(max_examples=LINEAR_EXAMPLES["core"], deadline=None)
+    @given(**LINEAR_ARGUMENTS)
+    def test_property_linear_and_exact(self, bands: int, lg: float, theta: float, phi: float) -> None:
+        self._linear_and_exact(bands, lg, theta, phi)
+
+    @pytest.mark.slow
+    @settings(max_examples=LINEAR_EXAMPLES["slow"], deadline=None)
+    @given(**LINEAR_ARGUMENTS)
+    def test_property_linear_and_exact_full(self, bands: int, lg: float, theta: float, phi: float) -> None:
+        self._linear_and_exact(bands, lg, theta, phi)
 
 
 class TestHorizontalIrradiance:

@@ -24,6 +24,7 @@ at module level) imports neither colour-science nor the tools at module level.
 from __future__ import annotations
 
 import ast
+import functools
 from pathlib import Path
 from typing import NamedTuple
 
@@ -34,7 +35,7 @@ SKYSH: Path = ROOT / "skysh"
 
 LAYERS: dict[str, int] = {
     # 0: foundation (argument checks, version, the npz reader)
-    "_version": 0, "_checks": 0, "_npz": 0, "_mitsuba_data": 0,
+    "_version": 0, "_checks": 0, "_npz": 0, "_mitsuba_data": 0, "argtypes": 0,
     # 1: SH mathematics and the fitted parameters' domain and basis
     "sh": 1, "poly": 1, "sun": 1,
     # 2: the sky model, and algorithms on SH coefficients alone
@@ -66,6 +67,7 @@ ALLOWED: dict[str, frozenset[str]] = {name: frozenset(deps) for name, deps in {
     "_checks": (),
     "_npz": (),
     "_mitsuba_data": (),
+    "argtypes": (),
     "sh": ("_checks",),
     "poly": ("_checks",),
     "sun": ("_checks",),
@@ -83,19 +85,20 @@ ALLOWED: dict[str, frozenset[str]] = {name: frozenset(deps) for name, deps in {
     "lights": ("_checks", "coefficient_file", "ground", "poly", "preetham", "sh", "solar", "sunlight"),
     "runtime": ("_checks", "coefficient_file", "ground", "lights", "poly", "preetham", "sh", "sunlight", "dering"),
     "export_dering": ("_checks", "dering", "sh", "shmin"),
-    "irradiance_fit": ("_checks", "fit", "preetham", "sh"),
+    "irradiance_fit": ("_checks", "fit", "preetham", "sh", "shmin"),
     "engines": ("_checks", "sh"),
     "render": ("_checks", "ground", "lights", "preetham", "runtime", "sh", "solar"),
-    "export_lights": ("_checks", "coefficient_file", "ground", "lights", "poly", "solar", "sunlight", "export_dering"),
+    "export_lights": ("_checks", "coefficient_file", "ground", "lights", "poly", "preetham", "solar", "sunlight",
+                      "export_dering"),
     "export": ("_checks", "_version", "coefficient_file", "poly", "preetham", "runtime", "sh", "export_lights",
                "export_js"),
-    "export_js": ("_version", "export", "export_lights", "export_js_parts", "preetham", "runtime", "sh", "engines"),
+    "export_js": ("_checks", "_version", "export", "export_lights", "export_js_parts", "preetham", "runtime", "sh", "engines"),
     "export_js_parts": ("export_lights", "export_dering"),
     "engine_sun": ("_checks", "engines"),
-    "viewer": ("_version", "engines", "export", "preetham", "render", "runtime", "sh"),
+    "viewer": ("_version", "engines", "export", "preetham", "render", "runtime", "sh", "sunlight"),
     "cli_text": ("_checks", "engines", "engine_sun", "export", "sh"),
-    "cli": ("_version", "cli_text", "engines", "export", "export_js", "poly", "preetham", "render", "runtime", "sh",
-            "sun", "viewer"),
+    "cli": ("_checks", "_version", "argtypes", "cli_text", "engines", "export", "export_js", "poly", "preetham",
+            "render", "runtime", "sh", "sun", "viewer"),
     "__init__": ("_version", "runtime"),
     "__main__": ("cli",),
 }.items()}
@@ -203,6 +206,13 @@ def _source(module: str) -> str:
     return (SKYSH / f"{module}.py").read_text(encoding="utf-8")
 
 
+@functools.cache
+def _imports(module: str) -> tuple[Import, ...]:
+    """:func:`imports_of` the module's source, parsed once per session (the tests below ask for every module's
+    imports several times; the files do not change during a run)."""
+    return tuple(imports_of(_source(module)))
+
+
 def _module_level_closure(module: str) -> set[str]:
     """The skysh modules loaded by importing ``module`` (module-level imports, followed)."""
     seen, todo = set(), [module]
@@ -211,7 +221,7 @@ def _module_level_closure(module: str) -> set[str]:
         if name in seen:
             continue
         seen.add(name)
-        todo += [i.target for i in imports_of(_source(name))
+        todo += [i.target for i in _imports(name)
                  if not (i.lazy or i.type_only or i.target.startswith("ext:")) and i.target in MODULES]
     return seen
 
@@ -237,14 +247,14 @@ def test_the_studies_are_out_of_the_library():
     """Issue 14: quantize imports neither runtime nor preetham, hazel neither dering, preetham nor quantize."""
     for module, banned in {"quantize": {"runtime", "preetham", "__init__"},
                            "hazel": {"dering", "preetham", "quantize", "__init__"}}.items():
-        targets = {i.target for i in imports_of(_source(module))}
+        targets = {i.target for i in _imports(module)}
         assert not targets & banned, (module, targets & banned)
         assert not any(t.startswith("ext:scipy") for t in targets), module  # the sky sampling went with the studies
 
 
 def test_the_library_never_imports_the_tools():
     for module in sorted(MODULES):
-        external = {i.target[4:] for i in imports_of(_source(module)) if i.target.startswith("ext:")}
+        external = {i.target[4:] for i in _imports(module) if i.target.startswith("ext:")}
         assert not external & NEVER_IN_THE_LIBRARY, (module, external & NEVER_IN_THE_LIBRARY)
 
 
@@ -253,7 +263,7 @@ def test_the_runtime_side_is_light_at_import(module):
     closure = _module_level_closure(module)
     assert "fit" not in closure, f"importing skysh.{module} loads the offline fit"
     for name in sorted(closure):
-        heavy = {i.target[4:] for i in imports_of(_source(name))
+        heavy = {i.target[4:] for i in _imports(name)
                  if i.target.startswith("ext:") and not (i.lazy or i.type_only)} & NOT_AT_RUNTIME_IMPORT
         assert not heavy, f"importing skysh.{module} loads {heavy} at module level through skysh.{name}"
 

@@ -136,6 +136,13 @@ def _composed(sky: SkySH, ts: float, t: float, phi: float, bands: int, gibbs: bo
     return total + ground
 
 
+FUSED_ARGUMENTS = {"ts": st.floats(0.0, HALF_PI), "t": st.floats(2.5, 6.0), "phi": st.floats(-10.0, 10.0),
+                   "albedo": st.floats(0.0, 1.0), "bands": st.integers(1, 7), "sun": st.booleans()}
+FUSED_EXAMPLES: dict[str, int] = {"core": 15, "slow": 40}
+"""Hypothesis examples of the fused-equals-composition property in the core run (``-m "not slow"``) and in its
+``slow`` twin; the fixed grid of test_fused_equals_the_composition (every band count 1, 2, 3, 5, 7, both filters,
+the domain's corners) stays in the core."""
+
 ENERGY_SKIES: list[tuple[float, float]] = [(0.0, 2.5), (0.6, 3.4), (1.2, 6.0), (HALF_PI, 2.5), (HALF_PI, 6.0)]
 """(sun zenith, turbidity) of the energy tests: the zenith, mid-sky, the horizon, both turbidity ends."""
 
@@ -244,11 +251,9 @@ class TestSunSH:
                     got = sky.coefficients(ts, t, phi, bands=bands, gibbs=gibbs, sun=True, ground_albedo=(0.2, 0.3, 0.5))
                     _close(got, _composed(sky, ts, t, phi, bands, gibbs, False, (0.2, 0.3, 0.5)), PATH_RTOL)
 
-    @settings(max_examples=40, deadline=None)
-    @given(ts=st.floats(0.0, HALF_PI), t=st.floats(2.5, 6.0), phi=st.floats(-10.0, 10.0),
-           albedo=st.floats(0.0, 1.0), bands=st.integers(1, 7), sun=st.booleans())
-    def test_property_fused_equals_the_composition(self, sky: SkySH, ts: float, t: float, phi: float, albedo: float,
-                                                   bands: int, sun: bool) -> None:
+    @staticmethod
+    def _fused_equals_the_composition(sky: SkySH, ts: float, t: float, phi: float, albedo: float, bands: int,
+                                      sun: bool) -> None:
         got = sky.coefficients(ts, t, phi, bands=bands, sun=sun, ground_albedo=albedo)
         expected = _composed(sky, ts, t, phi, bands, True, False, albedo)
         if not sun:  # the composition without the sun: remove its delta and its light on the ground
@@ -256,6 +261,19 @@ class TestSunSH:
                 _lower_hemisphere_sh(bands), albedo * _horizontal_irradiance(sky, ts, t) / math.pi
             ) * _sinc_filter(bands)[L_OF[: bands * bands]][:, None]
         _close(got, expected, PATH_RTOL)
+
+    @settings(max_examples=FUSED_EXAMPLES["core"], deadline=None)
+    @given(**FUSED_ARGUMENTS)
+    def test_property_fused_equals_the_composition(self, sky: SkySH, ts: float, t: float, phi: float, albedo: float,
+                                                   bands: int, sun: bool) -> None:
+        self._fused_equals_the_composition(sky, ts, t, phi, albedo, bands, sun)
+
+    @pytest.mark.slow
+    @settings(max_examples=FUSED_EXAMPLES["slow"], deadline=None)
+    @given(**FUSED_ARGUMENTS)
+    def test_property_fused_equals_the_composition_full(self, sky: SkySH, ts: float, t: float, phi: float,
+                                                        albedo: float, bands: int, sun: bool) -> None:
+        self._fused_equals_the_composition(sky, ts, t, phi, albedo, bands, sun)
 
     def test_without_a_sun_table(self) -> None:
         table = coefficient_file.read(coefficient_file.default_path())

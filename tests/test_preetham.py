@@ -14,15 +14,17 @@ tests; every tolerance is a named constant with the reason for its size.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 import subprocess
+from collections.abc import Iterator
 
-import colour
 import numpy as np
 import pytest
-from conftest import EPS, dc_relative_error, pythons_without_matplotlib
+from conftest import EPS, dc_relative_error, python_without_matplotlib
 from scipy.special import sph_harm_y
+from test_startup import Prefetched, prefetched, start_early
 
 from skysh import preetham, sh
 
@@ -173,8 +175,7 @@ RINGS_PER_CHUNK: int = 80
 """Rings of that rule evaluated at once (80 x 1,280 directions x 6 skies): bounds the memory."""
 
 
-@pytest.fixture(scope="module")
-def converged_sky_sh() -> dict[tuple[float, float], np.ndarray]:
+def dense_sky_sh() -> dict[tuple[float, float], np.ndarray]:
     """SH (49, 3) of the skies of SUNS by a dense product rule on the upper hemisphere.
 
     Gauss-Legendre in z on [0, 1] (CONVERGED_N_THETA nodes) x 1,280 uniform azimuths: 819,200
@@ -182,7 +183,7 @@ def converged_sky_sh() -> dict[tuple[float, float], np.ndarray]:
     sun-adapted one (no panel at the sun, no mirrored half, m < 0 coefficients computed, not set
     to zero). Summed ring by ring: the azimuth sums of L cos(m phi) and L sin(m phi), then the
     polar parts of the real SH from scipy (``sph_harm_y`` at phi = 0, times sqrt 2 for m > 0), so
-    neither sh.basis nor its 819,200 x 49 table is used. Computed once per module.
+    neither sh.basis nor its 819,200 x 49 table is used. Computed once per module (:func:`converged_sky_sh`).
     """
     x, wx = np.polynomial.legendre.leggauss(CONVERGED_N_THETA)
     z, wz = 0.5 * (x + 1.0), 0.5 * wx
@@ -208,6 +209,34 @@ def converged_sky_sh() -> dict[tuple[float, float], np.ndarray]:
                     total[l * l + l + mm] += math.sqrt(2.0) * (polar @ by_cos[:, mm])
                     total[l * l + l - mm] += math.sqrt(2.0) * (polar @ by_sin[:, mm])
     return {sun: total[:, 3 * k : 3 * k + 3] for k, sun in enumerate(SUNS)}
+
+
+@pytest.fixture(scope="module")
+def dense_job(request: pytest.FixtureRequest) -> Iterator[Prefetched[dict[tuple[float, float], np.ndarray]]]:
+    """:func:`dense_sky_sh` on a thread from the module's start (numpy; no test here changes skysh.preetham), so
+    that the first tests overlap it. Its sRGB matrix is made here first: colour-science's import, which swaps the
+    warning filters (catch_warnings: not thread-safe against pytest's own around each test), stays in this thread."""
+    preetham.rgb_from_xyz_matrix("sRGB")
+    yield from prefetched(request, {"dense": dense_sky_sh})
+
+
+@pytest.fixture(scope="module")
+def quiet_runs(request: pytest.FixtureRequest) -> Iterator[Prefetched[subprocess.CompletedProcess]]:
+    """Every program of :data:`WITHOUT_MATPLOTLIB`, run once, in the background from the module's start (each
+    mostly imports colour-science, which the module's other tests overlap)."""
+    yield from prefetched(request, {name: functools.partial(python_without_matplotlib, code, "-W", "default")
+                                    for name, code in WITHOUT_MATPLOTLIB.items()})
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _start_early(request: pytest.FixtureRequest) -> None:
+    start_early(request, "dense_job", "quiet_runs")
+
+
+@pytest.fixture(scope="module")
+def converged_sky_sh(dense_job: Prefetched[dict[tuple[float, float], np.ndarray]]) -> dict[tuple[float, float], np.ndarray]:
+    """:func:`dense_sky_sh`, computed once per module."""
+    return dense_job.result("dense")
 
 
 # --------------------------------------------------------------------------- #
@@ -448,6 +477,7 @@ COLOURSPACES = ["sRGB", "ITU-R BT.2020", "ACEScg", "Display P3", "Adobe RGB (199
 class TestRgbFromXyzMatrix:
     @pytest.mark.parametrize("name", COLOURSPACES)
     def test_reference_values(self, name):
+        import colour
         expected = colour.RGB_COLOURSPACES[name].matrix_XYZ_to_RGB
         np.testing.assert_array_equal(preetham.rgb_from_xyz_matrix(name), expected)
 
@@ -455,6 +485,7 @@ class TestRgbFromXyzMatrix:
         # No chromatic adaptation: the colourspace's own white gives R = G = B = Y,
         # up to the 4-digit rounding of the matrix published with IEC 61966-2-1
         # (colour-science uses it for sRGB): 2e-4.
+        import colour
         cs = colour.RGB_COLOURSPACES["sRGB"]
         white = colour.xyY_to_XYZ([*cs.whitepoint, 1.0])
         np.testing.assert_allclose(preetham.rgb_from_xyz_matrix("sRGB") @ white, [1.0, 1.0, 1.0], rtol=SRGB_MATRIX_RTOL)
@@ -472,6 +503,7 @@ class TestRadiance:
     @pytest.mark.parametrize("name", COLOURSPACES)
     def test_reference_values(self, name):
         # colour-science's own route from the same xyY.
+        import colour
         dirs = upper_dirs(300, seed=7)
         xyy = preetham.xyY(dirs, 0.9, 1.3, 3.0)
         expected = colour.XYZ_to_RGB(colour.xyY_to_XYZ(xyy), name, chromatic_adaptation_transform=None)
@@ -487,6 +519,7 @@ class TestRadiance:
         # The Y row of the inverse of colour-science's XYZ -> sRGB matrix gives back
         # the model's Y. (Not the published RGB -> XYZ matrix: sRGB's two published
         # 4-digit matrices are inverses only to 1e-4.)
+        import colour
         dirs = upper_dirs(100, seed=9)
         rgb = preetham.radiance(dirs, 0.7, 0.0, 4.0)
         y = rgb @ np.linalg.inv(colour.RGB_COLOURSPACES["sRGB"].matrix_XYZ_to_RGB)[1]
@@ -575,6 +608,7 @@ class TestSkySh:
 
     def test_colourspace(self):
         # The projection is linear: another colourspace is a 3x3 change of the sRGB coefficients.
+        import colour
         srgb = preetham.sky_sh(0.8, 3.0, bands=4)
         for name in ("ITU-R BT.2020", "ACEScg"):
             to_rgb = np.asarray(colour.RGB_COLOURSPACES[name].matrix_XYZ_to_RGB)
@@ -620,41 +654,46 @@ class TestSkySh:
             preetham.sky_sh(**kwargs)
 
 
-PRINT_OPTIONS = "import numpy as np\n{}\nprint(np.get_printoptions()['legacy'])"
-"""Prints numpy's legacy print mode after the import put in its place."""
+QUIET_MARK: str = "test_preetham: sky_sh done"
+"""Written to stderr by the "skysh" program after sky_sh: what comes before it is sky_sh's output alone."""
 
 WITHOUT_MATPLOTLIB = {
-    "sky_sh": "from skysh import preetham; preetham.sky_sh(0.5, 3.0, bands=2)",
-    "colour": "import colour",
-    "other warning": "from skysh import preetham; preetham.rgb_from_xyz_matrix('sRGB')\n"
-                     "import warnings; warnings.warn('a different warning', UserWarning)",
-    "colour print options": PRINT_OPTIONS.format("import colour"),
-    "skysh print options": PRINT_OPTIONS.format("from skysh import preetham; preetham.rgb_from_xyz_matrix('sRGB')"),
+    "colour": "import colour\nimport numpy as np; print(np.get_printoptions()['legacy'])",
+    "skysh": "from skysh import preetham; preetham.sky_sh(0.5, 3.0, bands=2)\n"
+             f"import sys; print({QUIET_MARK!r}, file=sys.stderr, flush=True)\n"
+             "import numpy as np; print(np.get_printoptions()['legacy'])\n"
+             "import warnings; warnings.warn('a different warning', UserWarning)",
 }
-"""The programs TestQuietWithoutMatplotlib runs, by name: each in a fresh interpreter with warnings shown."""
+"""The programs TestQuietWithoutMatplotlib runs, each in a fresh interpreter with warnings shown (two serve its three
+tests): colour-science alone (the controls: its warning, its print mode), and skysh's sky_sh (which imports
+colour-science), then numpy's print mode, then a warning skysh does not filter."""
 
 
+@pytest.mark.late
 class TestQuietWithoutMatplotlib:
     """A plain install has colour-science without matplotlib; skysh hides colour's warning about it."""
 
     @pytest.fixture(scope="class")
-    def runs(self) -> dict[str, subprocess.CompletedProcess]:
-        """Every program of WITHOUT_MATPLOTLIB, run once, side by side (each mostly imports colour-science)."""
-        return pythons_without_matplotlib(WITHOUT_MATPLOTLIB, "-W", "default")
+    def runs(self, quiet_runs: Prefetched[subprocess.CompletedProcess]) -> dict[str, subprocess.CompletedProcess]:
+        return {name: quiet_runs.result(name) for name in WITHOUT_MATPLOTLIB}
 
     def test_sky_sh_is_quiet(self, runs: dict[str, subprocess.CompletedProcess]) -> None:
-        result = runs["sky_sh"]
-        assert result.returncode == 0 and result.stderr == "", result.stderr
+        result = runs["skysh"]
+        assert result.returncode == 0 and QUIET_MARK in result.stderr, result.stderr
+        before, _, after = result.stderr.partition(QUIET_MARK + "\n")
+        assert before == "", result.stderr
+        # after sky_sh, only the program's own warning (so nothing at exit either)
+        assert [line for line in after.splitlines() if "a different warning" not in line] == [], result.stderr
 
     def test_other_colour_warnings_still_show(self, runs: dict[str, subprocess.CompletedProcess]) -> None:
         """The filter is exactly that warning: colour's import under the shim warns without skysh (control),
         and a warning skysh does not filter still reaches the user after skysh imported colour."""
         assert '"Matplotlib" related API features are not available' in runs["colour"].stderr
-        other = runs["other warning"]
-        assert "a different warning" in other.stderr and "Matplotlib" not in other.stderr
+        other = runs["skysh"]
+        assert "a different warning" in other.stderr.split(QUIET_MARK)[-1] and "Matplotlib" not in other.stderr
 
     def test_numpy_print_options_are_left_alone(self, runs: dict[str, subprocess.CompletedProcess]) -> None:
         """colour-science's import sets numpy's legacy print mode (control); skysh's import of it does not."""
-        assert runs["colour print options"].stdout.strip() == "1.13"
-        result = runs["skysh print options"]
+        assert runs["colour"].stdout.strip() == "1.13"
+        result = runs["skysh"]
         assert result.stdout.strip() == "False", result.stderr

@@ -477,18 +477,41 @@ _TURBIDITIES = st.one_of(st.sampled_from([2.5, 6.0, math.nextafter(2.5, 3.0), ma
 _AZIMUTHS = st.one_of(st.sampled_from([0.0, math.pi, -math.pi, 2 * math.pi]), st.floats(-1e4, 1e4))
 
 
+_IN_DOMAIN = {"ts": _ZENITHS, "t": _TURBIDITIES, "phi": _AZIMUTHS, "bands": st.integers(1, 7), "gibbs": st.booleans(),
+              "irradiance": st.booleans()}
+_OUTSIDE_ZENITHS = st.one_of(st.floats(max_value=-1e-300), st.floats(min_value=math.nextafter(HALF_PI, 4.0)))
+_OUTSIDE_TURBIDITIES = st.one_of(st.floats(max_value=math.nextafter(2.5, 0.0)), st.floats(min_value=math.nextafter(6.0, 7.0)))
+
+EXAMPLES: dict[str, dict[str, int]] = {"in domain": {"core": 60, "slow": 300}, "refused": {"core": 40, "slow": 200}}
+"""Hypothesis examples of TestProperties' tests in the core run (``-m "not slow"``) and in their ``slow`` twins
+(``_full``). Both draw from the same strategies, their explicit edge values included (zeniths 0, -0, pi/2 and its
+neighbour, the denormal; turbidities 2.5, 6 and their neighbours; azimuths 0, +-pi, 2 pi); the domain's corners
+and edges are also checked deterministically (test_exact_corners_and_edges)."""
+
+
 class TestProperties:
-    @settings(max_examples=300, deadline=None)
-    @given(ts=_ZENITHS, t=_TURBIDITIES, phi=_AZIMUTHS, bands=st.integers(1, 7), gibbs=st.booleans(),
-           irradiance=st.booleans())
-    def test_finite_everywhere_in_domain(self, sky: SkySH, ts: float, t: float, phi: float, bands: int,
-                                         gibbs: bool, irradiance: bool) -> None:
+    @staticmethod
+    def _finite_everywhere_in_domain(sky: SkySH, ts: float, t: float, phi: float, bands: int, gibbs: bool,
+                                     irradiance: bool) -> None:
         fast = sky.coefficients(ts, t, phi, bands=bands, gibbs=gibbs, irradiance=irradiance)
         slow = sky.coefficients(np.array([ts]), np.array([t]), np.array([phi]), bands=bands, gibbs=gibbs,
                                 irradiance=irradiance)[0]
         assert np.all(np.isfinite(fast)) and np.all(np.isfinite(slow))
         assert fast[0, 1] > 0.0  # the sky's DC term (mean radiance) is positive
         _close(fast, slow, PATH_RTOL)
+
+    @settings(max_examples=EXAMPLES["in domain"]["core"], deadline=None)
+    @given(**_IN_DOMAIN)
+    def test_finite_everywhere_in_domain(self, sky: SkySH, ts: float, t: float, phi: float, bands: int,
+                                         gibbs: bool, irradiance: bool) -> None:
+        self._finite_everywhere_in_domain(sky, ts, t, phi, bands, gibbs, irradiance)
+
+    @pytest.mark.slow
+    @settings(max_examples=EXAMPLES["in domain"]["slow"], deadline=None)
+    @given(**_IN_DOMAIN)
+    def test_finite_everywhere_in_domain_full(self, sky: SkySH, ts: float, t: float, phi: float, bands: int,
+                                              gibbs: bool, irradiance: bool) -> None:
+        self._finite_everywhere_in_domain(sky, ts, t, phi, bands, gibbs, irradiance)
 
     def test_exact_corners_and_edges(self, sky: SkySH) -> None:
         edge = np.linspace(0.0, 1.0, 33)
@@ -500,16 +523,29 @@ class TestProperties:
         for a, b in CORNERS:
             assert np.all(np.isfinite(sky.coefficients(a, b, 0.3, bands=7)))
 
-    @settings(max_examples=200, deadline=None)
-    @given(ts=st.one_of(st.floats(max_value=-1e-300), st.floats(min_value=math.nextafter(HALF_PI, 4.0))),
-           t=_TURBIDITIES)
+    @settings(max_examples=EXAMPLES["refused"]["core"], deadline=None)
+    @given(ts=_OUTSIDE_ZENITHS, t=_TURBIDITIES)
     def test_outside_zenith_refused(self, sky: SkySH, ts: float, t: float) -> None:
         with pytest.raises(ValueError, match="sun_zenith"):
             sky.coefficients(ts, t)
 
-    @settings(max_examples=200, deadline=None)
-    @given(t=st.one_of(st.floats(max_value=math.nextafter(2.5, 0.0)), st.floats(min_value=math.nextafter(6.0, 7.0))))
+    @pytest.mark.slow
+    @settings(max_examples=EXAMPLES["refused"]["slow"], deadline=None)
+    @given(ts=_OUTSIDE_ZENITHS, t=_TURBIDITIES)
+    def test_outside_zenith_refused_full(self, sky: SkySH, ts: float, t: float) -> None:
+        with pytest.raises(ValueError, match="sun_zenith"):
+            sky.coefficients(ts, t)
+
+    @settings(max_examples=EXAMPLES["refused"]["core"], deadline=None)
+    @given(t=_OUTSIDE_TURBIDITIES)
     def test_outside_turbidity_refused(self, sky: SkySH, t: float) -> None:
+        with pytest.raises(ValueError, match="turbidity"):
+            sky.coefficients(0.5, t)
+
+    @pytest.mark.slow
+    @settings(max_examples=EXAMPLES["refused"]["slow"], deadline=None)
+    @given(t=_OUTSIDE_TURBIDITIES)
+    def test_outside_turbidity_refused_full(self, sky: SkySH, t: float) -> None:
         with pytest.raises(ValueError, match="turbidity"):
             sky.coefficients(0.5, t)
 

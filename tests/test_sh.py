@@ -394,6 +394,14 @@ class TestBasis:
 # --------------------------------------------------------------------------- #
 # Evaluate
 # --------------------------------------------------------------------------- #
+LINEARITY_ARGUMENTS = (coefficient_arrays(4), coefficient_arrays(4), st.floats(-10, 10, allow_subnormal=False),
+                       st.floats(-10, 10, allow_subnormal=False), unit_vectors)
+
+LINEARITY_EXAMPLES: dict[str, int] = {"core": 15, "slow": 50}
+"""Hypothesis examples of TestEvaluate's linearity in the core run (``-m "not slow"``) and in its ``slow`` twin:
+each example draws two arrays through hypothesis.extra.numpy, most of the test's time."""
+
+
 class TestEvaluate:
     def test_reference_values(self):
         dirs = random_unit_vectors(40, seed=5)
@@ -407,19 +415,23 @@ class TestEvaluate:
         c[0], c[2] = math.sqrt(4 * math.pi), 2 * math.sqrt(4 * math.pi / 3)
         np.testing.assert_allclose(sh.evaluate(c, dirs), 1 + 2 * dirs[:, 2], rtol=0, atol=SMALL_EVAL_ATOL)
 
-    @settings(max_examples=50, deadline=None)
-    @given(
-        coefficient_arrays(4),
-        coefficient_arrays(4),
-        st.floats(-10, 10, allow_subnormal=False),
-        st.floats(-10, 10, allow_subnormal=False),
-        unit_vectors,
-    )
-    def test_linearity(self, c1, c2, a, b, d):
+    @staticmethod
+    def _linearity(c1, c2, a, b, d):
         lhs = sh.evaluate(a * c1 + b * c2, d)
         rhs = a * sh.evaluate(c1, d) + b * sh.evaluate(c2, d)
         scale = (abs(a) * np.abs(c1).max() + abs(b) * np.abs(c2).max() + 1.0) * 16
         np.testing.assert_allclose(lhs, rhs, rtol=0, atol=LINEARITY_ATOL_PER_TERM * scale)
+
+    @settings(max_examples=LINEARITY_EXAMPLES["core"], deadline=None)
+    @given(*LINEARITY_ARGUMENTS)
+    def test_linearity(self, c1, c2, a, b, d):
+        self._linearity(c1, c2, a, b, d)
+
+    @pytest.mark.slow
+    @settings(max_examples=LINEARITY_EXAMPLES["slow"], deadline=None)
+    @given(*LINEARITY_ARGUMENTS)
+    def test_linearity_full(self, c1, c2, a, b, d):
+        self._linearity(c1, c2, a, b, d)
 
     def test_n_dimensional(self):
         dirs = random_unit_vectors(12, seed=6)

@@ -14,10 +14,11 @@ Every tolerance is a named constant with the reason for its size.
 
 from __future__ import annotations
 
+import functools
 import math
 import re
+from typing import Any
 
-import colour
 import numpy as np
 import pytest
 from conftest import EPS, L_OF, random_unit_vectors, scipy_real_sh
@@ -26,6 +27,14 @@ from hypothesis import strategies as st
 from scipy.special import eval_legendre, legendre
 
 from skysh import sh, solar
+
+
+@pytest.fixture(scope="module")
+def colour() -> Any:
+    """colour-science, imported by the tests that compare with it (not at collection: about 1.5 s)."""
+    import colour
+
+    return colour
 
 FORMULA_RTOL: float = 1e-13
 """The model typed again here vs skysh: the same few exp / pow per wavelength in another order."""
@@ -291,14 +300,14 @@ class TestSpectralRadiance:
 
 class TestLuminance:
     @pytest.mark.parametrize("theta,turbidity", [(0.0, 2.5), (0.8, 3.0), (1.4, 5.5), (math.pi / 2, 6.0)])
-    def test_683_trapezoid_over_v_lambda(self, theta: float, turbidity: float) -> None:
+    def test_683_trapezoid_over_v_lambda(self, colour: Any, theta: float, turbidity: float) -> None:
         v = colour.colorimetry.SDS_LEFS_PHOTOPIC["CIE 1924 Photopic Standard Observer"]
         lam = np.arange(380, 751)
         s = solar.spectral_radiance(theta, turbidity, lam.astype(float))
         expected = 683.0 * np.trapezoid(s * v[lam], lam)
         assert solar.luminance(theta, turbidity) == pytest.approx(expected, rel=INTEGRAL_RTOL)
 
-    def test_colour_sd_to_xyz(self) -> None:
+    def test_colour_sd_to_xyz(self, colour: Any) -> None:
         # colour's plain sum over 360-830 nm of the spectrum, zero outside 380-750 (as skysh defines
         # it) and with its two end samples halved: the trapezoid rule as a plain sum.
         # colour-science 0.4 divides an explicit-k result by 100 (its ``as_percentage`` path).
@@ -351,7 +360,7 @@ class TestPublishedFigures:
 
 class TestRGB:
     @pytest.mark.parametrize("name", ["sRGB", "ITU-R BT.2020", "ACEScg"])
-    def test_colour_route(self, name: str) -> None:
+    def test_colour_route(self, colour: Any, name: str) -> None:
         xyz = solar.illuminance_xyz(0.5, 3.0)
         expected = colour.XYZ_to_RGB(xyz, name, chromatic_adaptation_transform=None)
         np.testing.assert_allclose(solar.illuminance_rgb(0.5, 3.0, name), expected, rtol=COLOUR_MATRIX_RTOL)
@@ -377,12 +386,17 @@ def delta_irradiance(window: np.ndarray, t: np.ndarray) -> np.ndarray:
     return sum(A_L[l] * window[l] * (2 * l + 1) / (4 * math.pi) * eval_legendre(l, t) for l in range(len(window)))
 
 
+@functools.cache
+def legendre_power_basis(l: int) -> np.polynomial.Polynomial:
+    """P_l in the power basis from scipy's legendre coefficients (built once per l: the bisections call it often)."""
+    return np.polynomial.Polynomial(legendre(l).coeffs[::-1])  # scipy poly1d: highest power first
+
+
 def exact_minimum_power_basis(window: np.ndarray) -> float:
     """The same minimum from the power-basis polynomial (scipy's legendre coefficients, numpy roots)."""
     p = np.polynomial.Polynomial([0.0])
     for l in range(len(window)):
-        coeffs = legendre(l).coeffs[::-1]  # scipy poly1d: highest power first
-        p = p + A_L[l] * window[l] * (2 * l + 1) / (4 * math.pi) * np.polynomial.Polynomial(coeffs)
+        p = p + A_L[l] * window[l] * (2 * l + 1) / (4 * math.pi) * legendre_power_basis(l)
     candidates = [-1.0, 1.0] + [r.real for r in p.deriv().roots() if abs(r.imag) < 1e-9 and -1 <= r.real <= 1]
     return float(min(p(np.array(candidates))))
 
@@ -437,7 +451,10 @@ class TestSunWindow:
             other = solar.sun_window_family(w + dw, largest_attenuation_here(w + dw, bands), bands)
             assert solar.delta_irradiance_error(other) >= best - OPTIMALITY_SLACK
 
+    @pytest.mark.slow
     def test_derivation_reproduces_the_table(self) -> None:
+        """The offline derivation's global scan (a bisection in a at every cutoff scanned) lands on the table.
+        ``slow``: the core keeps the table's local optimality (test_table_is_the_family_and_locally_optimal)."""
         w, a, err = solar.derive_sun_window(3)
         w_t, a_t = solar.SUN_WINDOW_PARAMETERS[2]
         assert w == pytest.approx(w_t, abs=W_DERIVED_ATOL) and a == pytest.approx(a_t, abs=A_DERIVED_ATOL)

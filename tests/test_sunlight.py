@@ -13,7 +13,8 @@ property over the domain), shapes, refusals naming the parameter, the horizon
 (tiny, finite), the bound that keeps every value finite, the direction of
 :meth:`SunLight.light` against :func:`skysh.solar.sun_direction`, and, in a
 subprocess, that the runtime imports neither colour-science nor the offline
-modules.
+modules (started in the background when the module begins, its test runs last: the
+module's other tests overlap it).
 
 Tolerances are named constants with the reason for their size.
 """
@@ -23,13 +24,14 @@ from __future__ import annotations
 import json
 import math
 import subprocess
-import sys
+from collections.abc import Iterator
 
 import numpy as np
 import pytest
-from conftest import ROOT
+from conftest import python_without_matplotlib
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from test_startup import Prefetched, prefetched, start_early
 
 from skysh import coefficient_file as cf
 from skysh import solar, sunlight
@@ -285,20 +287,38 @@ class TestRefusals:
                 assert np.all(np.isfinite(extreme.rgb(ts, t))) and np.all(extreme.xyz(ts, t) > 0)
 
 
+IMPORTS_CODE: str = (
+    "import sys, json\n"
+    "import skysh.sunlight as s\n"
+    "sun = s.SunLight.load()\n"
+    "sun.rgb(0.5, 3.0); sun.rgb([0.1, 0.2], 3.0); sun.xyz(1.0, 5.0); sun.light(0.3, 2.7, 1.0)\n"
+    "before = sorted(m for m in ('colour', 'skysh.solar', 'skysh.fit', 'skysh.preetham') if m in sys.modules)\n"
+    "import skysh.solar\n"
+    "skysh.solar.illuminance_xyz(0.5, 3.0)\n"
+    "print(json.dumps({'before': before, 'after': 'colour' in sys.modules}))\n"
+)
+"""The runtime path in a fresh interpreter, then the spectral model (the negative control); prints what each
+imported. Run with matplotlib unimportable (conftest.python_without_matplotlib): what is looked for is
+colour-science itself, whose import then skips its plotting package (and matplotlib)."""
+
+
+@pytest.fixture(scope="module")
+def import_run(request: pytest.FixtureRequest) -> Iterator[Prefetched[subprocess.CompletedProcess]]:
+    """The run of IMPORTS_CODE, in the background from the module's start (it mostly imports colour-science)."""
+    yield from prefetched(request, {"imports": lambda: python_without_matplotlib(IMPORTS_CODE)})
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _start_early(request: pytest.FixtureRequest) -> None:
+    start_early(request, "import_run")
+
+
+@pytest.mark.late
 class TestImports:
-    def test_no_colour_and_no_offline_modules(self) -> None:
+    def test_no_colour_and_no_offline_modules(self, import_run: Prefetched[subprocess.CompletedProcess]) -> None:
         """The runtime path imports no colour-science, skysh.solar or skysh.fit; the negative control shows
         that importing the spectral model would be seen."""
-        code = (
-            "import sys, json\n"
-            "import skysh.sunlight as s\n"
-            "sun = s.SunLight.load()\n"
-            "sun.rgb(0.5, 3.0); sun.rgb([0.1, 0.2], 3.0); sun.xyz(1.0, 5.0); sun.light(0.3, 2.7, 1.0)\n"
-            "before = sorted(m for m in ('colour', 'skysh.solar', 'skysh.fit', 'skysh.preetham') if m in sys.modules)\n"
-            "import skysh.solar\n"
-            "skysh.solar.illuminance_xyz(0.5, 3.0)\n"
-            "print(json.dumps({'before': before, 'after': 'colour' in sys.modules}))\n"
-        )
-        result = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, check=True)
+        result = import_run.result("imports")
+        assert result.returncode == 0, result.stderr[-3000:]
         out = json.loads(result.stdout.strip().splitlines()[-1])
         assert out == {"before": [], "after": True}

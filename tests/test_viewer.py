@@ -27,25 +27,31 @@ Chromium is installed. What they check:
 
 Server tests (no browser): loopback only, only the page's files (404 for any other
 path, ``..`` and encoded traversal), a foreign Host header refused, Ctrl-C stops it.
+
+Speed (issue 14): one browser; the pages from ``file://`` and from the server load at the
+same time; the tests set the controls by script (:data:`SET_CONTROLS`, one frame per setting),
+the page from the server by hand (Playwright's actions: real clicks); the ``serve()``
+subprocess starts in the background when the module begins (its test runs last).
 """
 
 from __future__ import annotations
 
 import base64
+import functools
 import http.client
 import json
 import math
 import re
-import signal
-import subprocess
 import sys
 import threading
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
-from conftest import load_script
+from conftest import NO_MATPLOTLIB, load_script
+from test_startup import Prefetched, asked_for, prefetched, server_session, start_early
 
 from skysh import SkySH, engines, preetham, render, sh, viewer
 
@@ -101,10 +107,6 @@ SLIDER_MOVE_ROWS: float = 0.08
 """Lowering the sun by 25 degrees moves it by 0.139 of the height; at least 0.08 shows the slider
 moved it (SUN_ROW_FRACTION on each end)."""
 
-SERVER_START_TIMEOUT: float = 180.0
-"""Seconds for ``serve`` to print its address in a subprocess (imports, loading the
-coefficient file and colour-science on a shared machine)."""
-
 TEST_VIEWPORT: dict[str, int] = {"width": 700, "height": 500}
 """Browser window of the tests, CSS pixels: half the screenshots' (shots.VIEWPORT) in each direction, a
 quarter of the pixels to draw in software WebGL and to read back; panels of about 170 x 85 pixels still
@@ -152,20 +154,82 @@ def browser() -> Any:
         instance.close()
 
 
-class Loaded:
-    """A page after its first frame, with every problem it reported and every URL it requested."""
+SET_CONTROLS: str = """async (groups) => {
+    // What Playwright's actions do to each control, all in one call (one frame drawn, not one per control):
+    // fill (a range: focus, value, 'input' and 'change'), select_option (the option, 'input' and 'change'),
+    // set_checked (nothing when already so, else a click, then the state checked). As set_controls: a group's
+    // values are read before it is set, a control already at its value is left alone, a disabled or hidden one fails.
+    const fire = (el) => { el.dispatchEvent(new Event("input", { bubbles: true, composed: true }));
+                           el.dispatchEvent(new Event("change", { bubbles: true })); };
+    for (const group of groups) {
+        const els = group.map(([id]) => document.getElementById(id));
+        const current = els.map((el) => (el.type === "checkbox" ? el.checked : el.value));
+        for (const [k, [id, kind, value]] of group.entries()) {
+            const el = els[k];
+            if (kind === "fill" ? Number(value) === Number(current[k]) : value === current[k]) continue;
+            if (kind === "check" && el.checked === value) continue;
+            if (el.disabled || !el.checkVisibility()) throw new Error(`#${id} is disabled or hidden: no user can set it`);
+            if (kind === "check") {
+                el.click();
+                if (el.checked !== value) throw new Error(`clicking #${id} did not change its state`);
+                continue;
+            }
+            if (kind === "select") {
+                const option = [...el.options].find((o) => o.value === value);
+                if (option === undefined) throw new Error(`#${id} has no option ${JSON.stringify(value)}`);
+                el.value = undefined;
+                option.selected = true;
+            } else {
+                if (el.type !== "range") throw new Error(`#${id} is not a range input: set it by hand`);
+                el.focus();
+                el.value = value.trim();
+            }
+            fire(el);
+        }
+    }
+    await skyshViewer.nextFrame();
+    return skyshViewer.state();
+}"""
+"""Set the page's controls as Playwright's actions do, then wait for the frame; the page's state. Its argument:
+groups (viewer_screenshots.FIRST's controls, then the others) of [id, kind, value] (:func:`_control`)."""
 
-    def __init__(self, browser: Any, url: str) -> None:
+
+def _control(key: str, value: Any) -> list[Any]:
+    """[id, kind, value] of one control for SET_CONTROLS, typed as viewer_screenshots.set_controls types it."""
+    if isinstance(value, bool):
+        return [key, "check", value]
+    if key in ("engine", "readout-format"):
+        return [key, "select", value]
+    return [key, "fill", str(value)]
+
+
+class Loaded:
+    """A page after its first frame, with every problem it reported and every URL it requested.
+
+    Made in two steps so that two pages load at the same time: the constructor starts the navigation,
+    :meth:`wait` waits for the first frame. ``by_hand``: :meth:`set` sets the controls with Playwright's
+    own actions (viewer_screenshots.set_controls), else by script (:data:`SET_CONTROLS`).
+    """
+
+    def __init__(self, browser: Any, url: str, by_hand: bool = False) -> None:
         self.problems: list[str] = []
         self.requests: list[str] = []
+        self.by_hand = by_hand
         self.page = browser.new_page(viewport=TEST_VIEWPORT)
         self.page.on("console", lambda m: self.problems.append(f"console {m.type}: {m.text}") if m.type == "error" else None)
         self.page.on("pageerror", lambda e: self.problems.append(f"page error: {e}"))
         self.page.on("requestfailed", lambda r: self.problems.append(f"request failed: {r.url} {r.failure}"))
         self.page.on("response", lambda r: self.problems.append(f"HTTP {r.status}: {r.url}") if r.status >= 400 else None)
         self.page.on("request", lambda r: self.requests.append(r.url))
-        self.page.goto(url)
+        self.page.goto(url, wait_until="commit")
+        self.dering_bands: list[int] = []
+
+    def wait(self) -> Loaded:
+        """Wait for the page's load event, then its first frame (as ``goto`` then viewer_screenshots.READY)."""
+        self.page.wait_for_load_state("load", timeout=shots.PAGE_TIMEOUT_MS)
         self.page.wait_for_function(shots.READY, timeout=shots.PAGE_TIMEOUT_MS)
+        self.dering_bands = self.page.evaluate("skyshViewer.deringBands")  # fixed when the page starts
+        return self
 
     def set(self, **changes: Any) -> dict[str, Any]:
         """
@@ -175,9 +239,13 @@ class Loaded:
         """
         values = {**DEFAULTS, **{key.replace("_", "-"): value for key, value in changes.items()}}
         if values["engine"] or values["irradiance"]:
-            intent = {"gibbs": False, "dering": values["bands"] in self.page.evaluate("skyshViewer.deringBands")}
+            intent = {"gibbs": False, "dering": values["bands"] in self.dering_bands}
             values = {**values, **intent, **{key.replace("_", "-"): value for key, value in changes.items()}}
-        return shots.set_controls(self.page, values)
+        if self.by_hand:
+            return shots.set_controls(self.page, values)
+        first = [key for key in shots.FIRST if key in values]
+        groups = [first, [key for key in values if key not in shots.FIRST]]
+        return self.page.evaluate(SET_CONTROLS, [[_control(key, values[key]) for key in group] for group in groups])
 
     def panel(self, name: str) -> np.ndarray:
         """The panel's pixels, (H, W, 3) uint8, top row first."""
@@ -190,10 +258,28 @@ class Loaded:
 
 
 @pytest.fixture(scope="module")
-def loaded(browser: Any, static_dir: Path) -> Loaded:
-    page = Loaded(browser, (static_dir / "index.html").as_uri())
-    yield page
-    page.page.close()
+def pages(request: pytest.FixtureRequest, browser: Any, static_dir: Path) -> Iterator[dict[str, Loaded]]:
+    """The page from ``file://`` (``file``, set by script) and, when a test asks for it, from the module's server
+    (``server``, set by hand), loading at the same time."""
+    opened = {"file": Loaded(browser, (static_dir / "index.html").as_uri())}
+    if asked_for(request, "served"):
+        host, port = request.getfixturevalue("server").server_address[:2]
+        opened["server"] = Loaded(browser, f"http://{host}:{port}/", by_hand=True)
+    try:
+        yield {name: page.wait() for name, page in opened.items()}
+    finally:
+        for page in opened.values():
+            page.page.close()
+
+
+@pytest.fixture(scope="module")
+def loaded(pages: dict[str, Loaded]) -> Loaded:
+    return pages["file"]
+
+
+@pytest.fixture(scope="module")
+def served(pages: dict[str, Loaded]) -> Loaded:
+    return pages["server"]
 
 
 @pytest.fixture(autouse=True)
@@ -248,19 +334,17 @@ def test_loads_from_file_without_errors(loaded: Loaded, static_dir: Path) -> Non
     assert state is not None and state["bands"] == 3
 
 
-def test_loads_from_server_without_errors(browser: Any, server: Any, loaded: Loaded, sky: SkySH) -> None:
+def test_loads_from_server_without_errors(served: Loaded, server: Any, loaded: Loaded, sky: SkySH) -> None:
+    """The page from the server, set by hand (Playwright's fill and a real click on a checkbox)."""
     host, port = server.server_address[:2]
     base = f"http://{host}:{port}/"
-    page = Loaded(browser, base)
-    try:
-        state = page.set(sun_zenith=50.0, sun_azimuth=-35.5, turbidity=4.2, bands=5)
-        assert page.problems == []
-        _own_files_only(page.requests, base)
-        shown = json.loads(page.readout())
-        expected = runtime_coefficients(sky, state)
-        assert np.max(np.abs(np.array(shown["coefficients"]) - expected) / np.abs(expected[0])) <= DC_TOLERANCE
-    finally:
-        page.page.close()
+    state = served.set(sun_zenith=50.0, sun_azimuth=-35.5, turbidity=4.2, bands=5, gibbs=False)
+    assert served.problems == []
+    _own_files_only(served.requests, base)
+    assert state["gibbs"] is False
+    shown = json.loads(served.readout())
+    expected = runtime_coefficients(sky, state)
+    assert np.max(np.abs(np.array(shown["coefficients"]) - expected) / np.abs(expected[0])) <= DC_TOLERANCE
 
 
 def test_content_security_policy_forbids_the_network(static_dir: Path) -> None:
@@ -328,7 +412,8 @@ def test_negative_radiance_is_marked_magenta(loaded: Loaded, sky: SkySH) -> None
 def test_midday_sky_is_blue_and_sunset_is_red_near_the_sun(loaded: Loaded) -> None:
     loaded.set(sun_zenith=20.0, turbidity=3.0)
     for name in ("latlong-sky", "latlong-sh"):
-        upper = loaded.panel(name)[: loaded.panel(name).shape[0] // 2].reshape(-1, 3).astype(float).mean(axis=0)
+        pixels = loaded.panel(name)
+        upper = pixels[: pixels.shape[0] // 2].reshape(-1, 3).astype(float).mean(axis=0)
         assert upper[2] > upper[0] and upper[2] >= upper[1], (name, upper)
     loaded.set(sun_zenith=89.0, sun_azimuth=0.0, turbidity=3.0)
     for name in ("latlong-sky", "latlong-sh"):
@@ -659,27 +744,24 @@ def test_server_serves_the_page_files_and_nothing_else(server: Any, static_dir: 
     assert _get(server, "/", host=f"localhost:{server.server_address[1]}")[0] == 200
 
 
-def test_serve_prints_its_address_and_stops_on_ctrl_c() -> None:
-    process = subprocess.Popen(
-        [sys.executable, "-c", "from skysh.viewer import serve; serve()"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )
-    try:
-        timer = threading.Timer(SERVER_START_TIMEOUT, process.kill)
-        timer.start()
-        line = process.stdout.readline()
-        timer.cancel()
-        match = re.fullmatch(r"skysh viewer: http://127\.0\.0\.1:(\d+)/ \(Ctrl-C to stop\)\n", line)
-        assert match, line
-        connection = http.client.HTTPConnection("127.0.0.1", int(match.group(1)), timeout=30)
-        connection.request("GET", "/")
-        assert connection.getresponse().status == 200
-        connection.close()
-        process.send_signal(signal.SIGINT)
-        out, err = process.communicate(timeout=60)
-    finally:
-        if process.poll() is None:
-            process.kill()
-            process.communicate()
-    assert process.returncode == 0, err
-    assert out == "skysh viewer: stopped\n" and "Traceback" not in err
+@pytest.fixture(scope="module")
+def serve_run(request: pytest.FixtureRequest) -> Iterator[Prefetched[dict[str, Any]]]:
+    """``serve()`` in a subprocess (test_startup.server_session), in the background from the module's start; as on a
+    plain install (skysh's dependencies: colour-science without matplotlib, whose import it then skips)."""
+    argv = [sys.executable, "-c", NO_MATPLOTLIB + "from skysh.viewer import serve; serve()"]
+    yield from prefetched(request, {"serve": functools.partial(server_session, argv, Path.cwd())})
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _start_early(request: pytest.FixtureRequest) -> None:
+    start_early(request, "serve_run")
+
+
+@pytest.mark.late
+def test_serve_prints_its_address_and_stops_on_ctrl_c(serve_run: Prefetched[dict[str, Any]]) -> None:
+    session = serve_run.result("serve")
+    line = session["line"]
+    assert re.fullmatch(r"skysh viewer: http://127\.0\.0\.1:(\d+)/ \(Ctrl-C to stop\)\n", line), line
+    assert session["status"] == 200
+    assert session["code"] == 0, session["err"]
+    assert session["out"] == "skysh viewer: stopped\n" and "Traceback" not in session["err"]

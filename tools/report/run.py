@@ -37,6 +37,7 @@ from report import (
 )
 from report.common import Context, Section, markdown_table, sig
 from report.plans import FULL, QUICK
+from skysh.argtypes import integer
 from skysh.runtime import SkySH
 
 SECTIONS: dict[int, ModuleType] = {
@@ -66,24 +67,13 @@ def parse_sections(text: str) -> list[int]:
     return chosen
 
 
-def positive_int(text: str) -> int:
-    """A positive integer argument."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
-    return value
-
-
 def build_parser() -> argparse.ArgumentParser:
     epilog = "sections:\n" + "\n".join(f"  {k:2d}. {t}" for k, t in SECTION_TITLES.items())
     parser = argparse.ArgumentParser(description=DESCRIPTION, epilog=epilog,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--out", type=Path, required=True, help="output directory (report.md and PNGs)")
     parser.add_argument("--quick", action="store_true", help="small sizes: well under a minute (the test suite's run)")
-    parser.add_argument("--jobs", type=positive_int, default=DEFAULT_JOBS,
+    parser.add_argument("--jobs", type=integer(), default=DEFAULT_JOBS,
                         help=f"worker processes for the sky projections (default {DEFAULT_JOBS})")
     parser.add_argument("--sections", type=parse_sections, default=list(SECTIONS), help="only these sections, e.g. '1,3'")
     parser.add_argument("--no-progress", action="store_true", help="no progress bars")

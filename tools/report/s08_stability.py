@@ -38,7 +38,7 @@ from skysh import dering, fit, poly, preetham, sh
 NUMBER: int = 8
 TITLE: str = "Stability where methods fail"
 EXTRAPOLATION_TURBIDITY: tuple[float, float] = (1.8, 8.0)
-"""Turbidities of the extrapolation study (inside Preetham's model, around the fitted [2.5, 6])."""
+"""Turbidities of the extrapolation study (inside Preetham's model, around the fitted turbidity [2.5, 6])."""
 EXTRAPOLATION_REPORTED: tuple[float, float] = (2.0, 7.5)
 """The summary reports the worst error at turbidities at most the first and at least the second."""
 REFUSAL_PROBES: tuple[tuple[float, float], ...] = (

@@ -167,7 +167,7 @@ def irradiance_comparison(
     Parameters
     ----------
     sun_zenith, turbidity, sun_azimuth
-        Sky points (radians, [1.7, 10], radians), broadcasting to (P,), P >= 1.
+        Sky points (radians, turbidity in [1.7, 10], radians), broadcasting to (P,), P >= 1.
     exact_bands
         Bands of the "exact" irradiance (:func:`exact_irradiance`), [10, 64].
     n_theta

@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from skysh import shmin
+from skysh._checks import check_coeffs
 
 __all__ = ["min_bound"]
 
@@ -42,7 +43,7 @@ def min_bound(coeffs: ArrayLike) -> NDArray[np.float64] | float:
     The seed's steps (optimal linear direction to +Z; eq. 3 exact; eqs. 4 and 5 at their worst
     phase), minimised over z exactly as a 2-D trust-region problem: ``docs/dering.md``.
     """
-    c, vector, _ = shmin.check_coeffs(coeffs, high=3)
+    c, vector, _ = check_coeffs(coeffs, high=3)
     if c.shape[-2] != 9:
         raise ValueError(f"coeffs must have 9 coefficients (3 bands) on axis -2, got {c.shape[-2]}")
     t, e, _ = shmin.normalised(np.moveaxis(c, -2, -1))
