@@ -87,8 +87,8 @@ __all__ = [
 
 HosekDataError = _mitsuba_data.HosekDataError
 
-SUN_ZENITH_RANGE: tuple[float, float] = (0.0, math.pi / 2.0)
-"""Sun zenith angles of the model, radians (solar elevation 0 to 90 degrees)."""
+SUN_ZENITH_RANGE: tuple[float, float] = preetham.SUN_ZENITH_RANGE
+"""Sun zenith angles of the model, radians (solar elevation 0 to 90 degrees; Preetham's interval)."""
 
 TURBIDITY_RANGE: tuple[float, float] = (1.0, 10.0)
 """Turbidities of the dataset (control points at 1, 2, ..., 10)."""

@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from skysh import sh
+from skysh import poly, sh
 from skysh._checks import (
     MAX_ARRAY_ELEMENTS,
     as_float_array,
@@ -84,8 +84,9 @@ __all__ = [
     "import_colour",
 ]
 
-SUN_ZENITH_RANGE: tuple[float, float] = (0.0, math.pi / 2.0)
-"""Domain of the sun zenith angle, radians (the model is undefined below the horizon)."""
+SUN_ZENITH_RANGE: tuple[float, float] = poly.SUN_ZENITH_DOMAIN
+"""Domain of the sun zenith angle, radians (the model is undefined below the horizon): the
+interval the fit covers too, written once in :data:`skysh.poly.SUN_ZENITH_DOMAIN`."""
 
 TURBIDITY_RANGE: tuple[float, float] = (1.7, 10.0)
 """Domain of the turbidity accepted by the model (unreliable below about 2)."""

@@ -5,10 +5,11 @@ Tests of the tabulated irradiance (issue 18)
 The coefficient file's certified 3-band irradiance table as the runtime serves it
 (``SkySH.coefficients(..., irradiance=True)``), checked against independent references:
 
--   never negative: the exact minimum (:func:`skysh.shmin.exact_min`, not the fit's own
-    :func:`skysh.irradiance_fit.sphere_minimum` nor the file's recorded certificate) at
-    12,004 held-out (sun zenith, turbidity) points of this file's own seed, corners and
-    edges included; negative control: the plain projection goes negative there;
+-   never negative: the exact minimum (:func:`skysh.shmin.exact_min`, the minimiser the
+    fit certified its own points with, itself checked against dense sampling and brute
+    force in ``tests/test_dering.py``; not the file's recorded certificate) at 12,004
+    held-out (sun zenith, turbidity) points of this file's own seed, other than the fit's,
+    corners and edges included; negative control: the plain projection goes negative there;
 -   the runtime equals :func:`skysh.irradiance_fit.evaluate_irradiance_table` rotated by
     :func:`skysh.sh.rotate_z`, scalar and batch; rotation equivariance on normals;
 -   closer to the true irradiance (:func:`skysh.irradiance_fit.true_irradiance`) than the

@@ -71,7 +71,7 @@ ALLOWED: dict[str, frozenset[str]] = {name: frozenset(deps) for name, deps in {
     "sh": ("_checks",),
     "poly": ("_checks",),
     "sun": ("_checks",),
-    "preetham": ("_checks", "sh"),
+    "preetham": ("_checks", "poly", "sh"),
     "ground": ("_checks", "sh"),
     "shmin": ("_checks", "sh"),
     "hazel": ("_checks", "sh"),
