@@ -22,17 +22,16 @@ Measures and options
     :func:`engine_cases`, :func:`is_padded_identity`.
 Running code
     :func:`load_script`, :func:`tools_on_path`, :func:`python_without_matplotlib`,
-    :func:`pythons_without_matplotlib`, :func:`run_concurrently`, :func:`environment_without_pythonpath`,
-    :class:`ToolRuns` (compilers and shader validators on generated text, each distinct run once),
-    :func:`glslang_job` (:data:`GLSLANG` on a fragment shader), :func:`prefetch_runs` (the GLSL ones validated
-    together).
-Order
-    The ``late`` marker: a test so marked runs after the other tests of its module.
+    :func:`pythons_without_matplotlib`, :func:`run_concurrently`, :func:`environment_without_pythonpath`.
+    Work run ahead in the background (tool runs, a module's named jobs) is in ``tests/background.py``.
+Hooks
+    The ``late`` marker (a test so marked runs after the other tests of its module);
+    :func:`pytest_configure_node` (the distribution mode, for ``background.modules_stay_whole``).
 Fixtures
     :func:`sky` (the shipped :class:`skysh.SkySH`, loaded once per session), :func:`exported` (its
     ``export_source`` texts, each made once; type :data:`Exported`), :func:`tool_runs` (the session's
-    :class:`ToolRuns`; :func:`selected_names` tells a module's prefetch what its selected tests are),
-    :func:`wheel` (the package's wheel, built once per session from a clean copy of the tree).
+    ``background.ToolRuns``), :func:`wheel` (the package's wheel, built once per session from a clean copy
+    of the tree).
 
 Tolerances stay in the test files, next to what they bound: their size follows from
 what each test compares (see each file's constants).
@@ -41,7 +40,6 @@ what each test compares (see each file's constants).
 from __future__ import annotations
 
 import functools
-import hashlib
 import importlib.util
 import inspect
 import json
@@ -50,16 +48,14 @@ import os
 import shutil
 import subprocess
 import sys
-import threading
 import types
-from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
-from concurrent.futures import Future, ThreadPoolExecutor
-from dataclasses import dataclass
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pytest
+from background import ToolRuns, modules_stay_whole
 from scipy.special import sph_harm_y
 
 from skysh import sh
@@ -206,7 +202,7 @@ REF_STARTS: dict[int, int] = {1: 1, 2: 1, 3: 3, 4: 4, 5: 4, 6: 4, 7: 4}
 """Newton runs per function in :func:`reference_min` (a 3-band function has at most 2 local minima on
 the sphere; a third start covers two grid minima in one basin)."""
 
-_REF_GRIDS: dict[tuple[int, int], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+_REF_GRIDS: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
 
 
 def tangents(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -217,17 +213,27 @@ def tangents(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return e1, np.cross(p, e1)
 
 
-def _ref_grid(bands: int, nt: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Product-grid nodes (M, 3), their basis (K, M) and 8 neighbours of each (M, 8), cached."""
+def _ref_grid(bands: int, nt: int) -> tuple[np.ndarray, np.ndarray]:
+    """Product-grid nodes (M, 3) and their basis (K, M), cached: ``sh.quadrature_rule(nt)``'s nodes, row by row
+    (nt rows of constant z, from the south pole up), each row M / nt equal steps in azimuth."""
     if (bands, nt) not in _REF_GRIDS:
         dirs, _ = sh.quadrature_rule(nt)
-        n_phi = len(dirs) // nt
-        idx = np.arange(len(dirs)).reshape(nt, n_phi)
-        rows, cols = np.arange(nt)[:, None], np.arange(n_phi)[None, :]
-        nb = [idx[np.clip(rows + a, 0, nt - 1), (cols + b) % n_phi].ravel()
-              for a in (-1, 0, 1) for b in (-1, 0, 1) if a or b]
-        _REF_GRIDS[(bands, nt)] = (dirs, np.ascontiguousarray(sh.basis(dirs, bands).T), np.stack(nb, 1))
+        _REF_GRIDS[(bands, nt)] = (dirs, np.ascontiguousarray(sh.basis(dirs, bands).T))
     return _REF_GRIDS[(bands, nt)]
+
+
+def _neighbour_min(vals: np.ndarray, nt: int) -> np.ndarray:
+    """Least of the 8 grid neighbours of every node's value (F, M) on :func:`_ref_grid`'s (nt, M / nt) grid: rows
+    clipped at the poles (a pole row is its own neighbour), columns wrapped in azimuth; by shifted views."""
+    v = vals.reshape(len(vals), nt, vals.shape[1] // nt)
+    padded = np.concatenate([v[:, :1], v, v[:, -1:]], axis=1)
+    padded = np.concatenate([padded[:, :, -1:], padded, padded[:, :, :1]], axis=2)
+    out = np.full_like(v, np.inf)
+    for a in range(3):
+        for b in range(3):
+            if a != 1 or b != 1:
+                np.minimum(out, padded[:, a : a + nt, b : b + v.shape[2]], out=out)
+    return out.reshape(vals.shape)
 
 
 def reference_min(f: np.ndarray, iters: int = 12, dense: int = 1) -> np.ndarray:
@@ -244,9 +250,10 @@ def reference_min(f: np.ndarray, iters: int = 12, dense: int = 1) -> np.ndarray:
     f = f / size  # values of order one: no overflow in the differences at 1e300
     n_f, k_c = f.shape
     bands = math.isqrt(k_c)
-    dirs, y, nb = _ref_grid(bands, REF_THETA[bands] * dense)
+    nt = REF_THETA[bands] * dense
+    dirs, y = _ref_grid(bands, nt)
     vals = f @ y
-    key = np.where(vals <= vals[:, nb].min(-1), vals, np.inf)
+    key = np.where(vals <= _neighbour_min(vals, nt), vals, np.inf)
     k = REF_STARTS[bands] * dense
     start = np.argpartition(key, k - 1, axis=1)[:, :k]
     start = np.where(np.isfinite(np.take_along_axis(key, start, 1)), start, np.argmin(vals, 1)[:, None])
@@ -396,186 +403,8 @@ def run_concurrently(commands: dict[str, list[str]], **popen: Any) -> dict[str, 
     return done
 
 
-TOOL_JOBS: int = max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1)
-"""Tool runs :class:`ToolRuns` works ahead at the same time: one per core this process may use."""
-
-TOOL_TIMEOUT_S: float = 300.0
-"""Hang guard of one tool run (a compile or a validation takes well under a second normally)."""
-
-RUN_DIR: str = "{dir}"
-"""Placeholder in a :class:`ToolRuns` command for the run's own directory (where its files are written)."""
-
-
-ToolJob = tuple[list[str], dict[str, str]]
-"""A run for :class:`ToolRuns`: (argv with :data:`RUN_DIR` for its directory, files written there first)."""
-
-
-GLSLANG: str | None = shutil.which("glslangValidator")
-"""The Khronos reference shader compiler (Debian's ``glslang-tools``), or None: shader tests skip without it."""
-
-def glslang_job(shader: str, language: str) -> ToolJob:
-    """glslangValidator on a complete fragment shader: GLSL validated (its version is in its text), HLSL compiled to
-    SPIR-V (entry point ``main``; glslang takes HLSL only with SPIR-V generation)."""
-    assert GLSLANG is not None
-    if language == "glsl":
-        return [GLSLANG, f"{RUN_DIR}/sky.frag"], {"sky.frag": shader}
-    return ([GLSLANG, "-D", "-V", "-e", "main", "-S", "frag", "-o", f"{RUN_DIR}/sky.spv", f"{RUN_DIR}/sky.hlsl"],
-            {"sky.hlsl": shader})
-
-
-def prefetch_runs(runs: ToolRuns, jobs: Iterable[ToolJob]) -> None:
-    """Queue ``jobs`` on ``runs`` as they come, except the GLSL validations of :func:`glslang_job`: those go together
-    at the end, in one glslangValidator run over all their files (each file its own compilation unit, as glslang
-    links only with -l or -V; the run fails if any file does, and then each runs alone: see
-    :meth:`ToolRuns.prefetch_together`). HLSL compiles (-V links the files given together) go one by one."""
-    glsl: list[ToolJob] = []
-
-    def others() -> Iterator[ToolJob]:
-        for job in jobs:
-            if list(job[1]) == ["sky.frag"]:
-                glsl.append(job)
-            else:
-                yield job
-
-    runs.prefetch(others())
-    if glsl and GLSLANG is not None:
-        names = [f"s{k}.frag" for k in range(len(glsl))]
-        batch = ([GLSLANG, *(f"{RUN_DIR}/{name}" for name in names)],
-                 {name: files["sky.frag"] for name, (_, files) in zip(names, glsl)})
-        runs.prefetch_together(batch, glsl)
-
-
-@dataclass(frozen=True)
-class ToolRun:
-    """One finished tool run: its ``directory`` (the files written, and what the tool made) and its ``result``."""
-
-    directory: Path
-    result: subprocess.CompletedProcess
-
-
-class ToolRuns:
-    """Compilers and shader validators run on generated text, each distinct run once.
-
-    A run is a command (``argv``, in which :data:`RUN_DIR` stands for the run's directory) and the files written
-    there first (name -> text); its key is the sha256 of both, so identical builds (the same flags, header and
-    harness) are made once and every test asking for them gets the same :class:`ToolRun`. :meth:`prefetch` queues
-    runs on :data:`TOOL_JOBS` background threads (a module's compiles overlap each other and its Python work);
-    :meth:`run` waits for a run already going, and does a queued or unknown run at once in the calling thread.
-    ``eager`` False makes :meth:`prefetch` do nothing (pytest-xdist sharing a module between processes: each
-    process then runs only what its own tests ask for). Every directory is under ``base`` (the session's
-    ``tmp_path_factory`` in the :func:`tool_runs` fixture: one per process, so xdist workers never share one).
-    """
-
-    def __init__(self, base: Path, eager: bool = True, jobs: int = TOOL_JOBS) -> None:
-        self.base, self.eager = base, eager
-        self._pool = ThreadPoolExecutor(max_workers=jobs, thread_name_prefix="tool-run")
-        self._futures: dict[str, Future[ToolRun]] = {}
-        self._lock = threading.Lock()
-
-    @staticmethod
-    def key(argv: Sequence[str], files: Mapping[str, str]) -> str:
-        """The sha256 (hex) of a run's command and files."""
-        return hashlib.sha256(json.dumps([list(argv), sorted(files.items())]).encode()).hexdigest()
-
-    def _execute(self, key: str, argv: Sequence[str], files: Mapping[str, str]) -> ToolRun:
-        directory = self.base / key[:24]
-        directory.mkdir(parents=True, exist_ok=True)
-        for name, text in files.items():
-            (directory / name).write_text(text)
-        command = [arg.replace(RUN_DIR, str(directory)) for arg in argv]
-        result = subprocess.run(command, capture_output=True, text=True, timeout=TOOL_TIMEOUT_S, check=False)
-        return ToolRun(directory, result)
-
-    def prefetch(self, runs: Iterable[tuple[Sequence[str], Mapping[str, str]]]) -> None:
-        """Queue ``runs`` (argv, files) in the background, in order, unless known or not ``eager``; each is queued as
-        soon as ``runs`` yields it (a generator's first runs start while it makes the next)."""
-        if not self.eager:
-            return
-        for argv, files in runs:
-            key = self.key(argv, files)
-            with self._lock:
-                if key not in self._futures:
-                    self._futures[key] = self._pool.submit(self._execute, key, tuple(argv), dict(files))
-
-    def run(self, argv: Sequence[str], files: Mapping[str, str]) -> ToolRun:
-        """The run of ``argv`` on ``files``: done once (here and now unless it is already running or done)."""
-        key = self.key(argv, files)
-        with self._lock:
-            future = self._futures.get(key)
-            mine = future is None or future.cancel()  # unknown, or queued and taken back: run it in this thread
-            if mine:
-                future = self._futures[key] = Future()
-                future.set_running_or_notify_cancel()
-        assert future is not None
-        if mine:
-            try:
-                future.set_result(self._execute(key, argv, files))
-            except BaseException as error:
-                future.set_exception(error)
-        return future.result()
-
-    def prefetch_together(self, batch: ToolJob, members: Sequence[ToolJob]) -> None:
-        """Queue ``batch``: one run doing the work of every run of ``members`` at once and failing if any of them
-        would (glslangValidator on several GLSL files). If it succeeds, each member's run counts as succeeded with the
-        batch's output; if not, each member runs on its own, so that a failure is told by its own run. Nothing unless
-        ``eager``; members already known are left as they are."""
-        if not self.eager:
-            return
-        waiting: list[tuple[str, ToolJob, Future[ToolRun]]] = []
-        with self._lock:
-            for argv, files in members:
-                key = self.key(argv, files)
-                if key not in self._futures:
-                    future: Future[ToolRun] = Future()
-                    future.set_running_or_notify_cancel()  # run() waits for it instead of taking it back
-                    self._futures[key] = future
-                    waiting.append((key, (argv, files), future))
-            if not waiting:
-                return
-            batch_future = self._pool.submit(self._execute, self.key(*batch), *batch)
-        batch_future.add_done_callback(functools.partial(self._settle, waiting))
-
-    def _settle(self, waiting: list[tuple[str, ToolJob, Future[ToolRun]]], batch_future: Future[ToolRun]) -> None:
-        """The members of a finished batch: its success shared, else each run on its own (in the background)."""
-        done = None if batch_future.cancelled() or batch_future.exception() else batch_future.result()
-        for key, (argv, files), future in waiting:
-            if done is not None and done.result.returncode == 0:
-                future.set_result(ToolRun(done.directory, subprocess.CompletedProcess(
-                    argv, 0, done.result.stdout, done.result.stderr)))
-                continue
-            try:
-                alone = self._pool.submit(self._execute, key, argv, files)
-            except RuntimeError as error:  # the session is ending (the pool shut down)
-                future.set_exception(error)
-                continue
-            alone.add_done_callback(functools.partial(self._copy, future))
-
-    @staticmethod
-    def _copy(future: Future[ToolRun], source: Future[ToolRun]) -> None:
-        if source.cancelled() or source.exception() is not None:
-            future.set_exception(source.exception() if not source.cancelled() else RuntimeError("run cancelled"))
-        else:
-            future.set_result(source.result())
-
-    def close(self) -> None:
-        """Drop the queued runs and wait for those running."""
-        self._pool.shutdown(wait=True, cancel_futures=True)
-
-
-@pytest.hookimpl(optionalhook=True)
-def pytest_configure_node(node: Any) -> None:
-    """pytest-xdist (controller side): pass the distribution mode on to each worker, whose own options say "no"."""
-    node.workerinput["skysh_dist"] = node.config.getoption("dist", "no")
-
-
-def modules_stay_whole(config: pytest.Config) -> bool:
-    """True when every test of a module runs in this process: no pytest-xdist, or ``--dist loadfile``."""
-    workerinput = getattr(config, "workerinput", None)
-    return workerinput is None or workerinput.get("skysh_dist") == "loadfile"
-
-
 # --------------------------------------------------------------------------- #
-# Order
+# Hooks: order, xdist
 # --------------------------------------------------------------------------- #
 def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line(
@@ -591,6 +420,12 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     for item in items:
         modules.setdefault(item.module, len(modules))
     items.sort(key=lambda item: (modules[item.module], item.get_closest_marker("late") is not None))
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_configure_node(node: Any) -> None:
+    """pytest-xdist (controller side): pass the distribution mode on to each worker, whose own options say "no"."""
+    node.workerinput["skysh_dist"] = node.config.getoption("dist", "no")
 
 
 # --------------------------------------------------------------------------- #
@@ -612,14 +447,6 @@ Exported = Callable[..., str]
 """The type of the :func:`exported` fixture: ``exported(language, **options)`` -> the export's text."""
 
 
-def selected_names(request: pytest.FixtureRequest) -> set[str]:
-    """The names (function, without parameters, and class) of the selected tests of ``request``'s module: what a
-    module's prefetch fixture queues the runs of."""
-    items = [item for item in request.session.items if getattr(item, "module", None) is request.module]
-    return ({getattr(item, "originalname", item.name) for item in items}
-            | {cls.__name__ for cls in (getattr(item, "cls", None) for item in items) if cls is not None})
-
-
 @pytest.fixture(scope="session")
 def exported(sky: SkySH) -> Exported:
     """``export_source(sky, language, **options)`` of the session's :func:`sky`, each distinct call made once (the
@@ -631,8 +458,8 @@ def exported(sky: SkySH) -> Exported:
 
 @pytest.fixture(scope="session")
 def tool_runs(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Iterator[ToolRuns]:
-    """The session's :class:`ToolRuns`, in its own temporary folder; eager when modules stay whole
-    (:func:`modules_stay_whole`)."""
+    """The session's ``background.ToolRuns``, in its own temporary folder; eager when modules stay whole
+    (``background.modules_stay_whole``)."""
     runs = ToolRuns(tmp_path_factory.mktemp("tool_runs"), eager=modules_stay_whole(request.config))
     yield runs
     runs.close()

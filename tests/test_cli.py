@@ -6,7 +6,7 @@ Most tests call :func:`skysh.cli.main` in-process (fast); a few run the real
 ``python -m skysh`` in a subprocess to see the exit status and that no
 traceback escapes. Those subprocesses (:data:`COMMANDS`, the quiet-without-matplotlib
 programs and the ``skysh view`` server) all start in the background when the module
-begins (test_startup.Prefetched); the tests that wait for them are marked ``late``, so the
+begins (background.Prefetched); the tests that wait for them are marked ``late``, so the
 in-process tests overlap them.
 """
 
@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from test_startup import Prefetched, prefetched, server_session, start_early
+from background import Prefetched, prefetched, server_session, start_early
 
 from skysh import SkySH, cli, sh, sun
 
@@ -95,9 +95,9 @@ def quiet_runs(request: pytest.FixtureRequest,
 
 @pytest.fixture(scope="module")
 def view_run(request: pytest.FixtureRequest) -> Iterator[Prefetched[dict[str, Any]]]:
-    """``python -m skysh view --port 0`` (test_startup.server_session), in the background from the module's start."""
+    """``python -m skysh view --port 0`` (background.server_session), in the background from the module's start."""
     argv = [sys.executable, "-m", "skysh", "view", "--port", "0"]
-    yield from prefetched(request, {"view": functools.partial(server_session, argv)})
+    yield from prefetched(request, {"view": functools.partial(server_session, argv, ROOT)})
 
 
 @pytest.fixture(scope="module", autouse=True)

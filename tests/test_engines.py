@@ -9,7 +9,7 @@ Tests of skysh.engines against each engine's own code
     in double precision.
 -   Every comparison has a negative control: the unconverted coefficients must fail it.
 
-The node processes start in the background when the module begins (test_startup.Prefetched); the
+The node processes start in the background when the module begins (background.Prefetched); the
 tests that read them are marked ``late``: the Python-only tests overlap them.
 
 References are skysh's own evaluation (:func:`skysh.sh.evaluate` of the radiance L, or of the
@@ -29,9 +29,9 @@ from typing import Any
 
 import numpy as np
 import pytest
+from background import Prefetched, prefetched, start_early
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from test_startup import Prefetched, prefetched, start_early
 
 from skysh import engines, sh
 from skysh.runtime import SkySH

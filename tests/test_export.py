@@ -32,7 +32,7 @@ demanding one.
 The C export is compiled with the machine's C compiler (skipped without one);
 GLSL and HLSL are validated with glslangValidator when it is installed
 (Debian's ``glslang-tools``; skipped otherwise) and always checked structurally.
-Compiles and validations go through the session's :class:`conftest.ToolRuns`: each
+Compiles and validations go through the session's :class:`background.ToolRuns`: each
 distinct one (command, header and harness text) is made once and shared by the tests
 that need it (one harness, test_export_lights.C_HARNESS, serves ``skysh_coefficients`` and
 ``skysh_engine_coefficients`` of a header, here and in tests/test_export_lights.py),
@@ -57,20 +57,8 @@ from typing import Any
 
 import numpy as np
 import pytest
-from conftest import (
-    GLSLANG,
-    PLAIN_DIP,
-    RUN_DIR,
-    Exported,
-    ToolJob,
-    ToolRuns,
-    dc_relative_error,
-    engine_cases,
-    glslang_job,
-    is_padded_identity,
-    prefetch_runs,
-    selected_names,
-)
+from background import GLSLANG, RUN_DIR, ToolJob, ToolRuns, glslang_job, selected_names
+from conftest import PLAIN_DIP, Exported, dc_relative_error, engine_cases, is_padded_identity
 from test_export_lights import CC, c_harness_job, compile_harness
 
 from skysh import SkySH, cli, preetham, sh, shmin
@@ -98,7 +86,7 @@ FLOAT32_TABLE_TOLERANCE: float = 1e-6
 written); measured about 1e-7."""
 
 Job = ToolJob
-"""A tool run for :class:`conftest.ToolRuns`: (argv, files written to its directory first)."""
+"""A tool run for :class:`background.ToolRuns`: (argv, files written to its directory first)."""
 
 NO_LIGHTS: str = "0 1 0 0 0"
 """The harness fields (sun, null_albedo, albedo r g b) of a line without the sun and the ground (test_export_lights.C_HARNESS)."""
@@ -216,7 +204,7 @@ def shader_float32_table_error(sky: SkySH, source: str, bands: int) -> float:
 
 
 # --------------------------------------------------------------------------- #
-# The module's compiles and validations (conftest.ToolRuns: each distinct one once)
+# The module's compiles and validations (background.ToolRuns: each distinct one once)
 # --------------------------------------------------------------------------- #
 SHADER_BANDS: list[int] = [1, 3, 7]
 """Band counts of the plain shader exports compiled by glslangValidator."""
@@ -334,12 +322,10 @@ def shader_jobs(exported: Exported, wanted: set[str]) -> Iterator[Job]:
 @pytest.fixture(scope="module", autouse=True)
 def _prefetch(request: pytest.FixtureRequest, exported: Exported, tool_runs: ToolRuns) -> None:
     """Queue the compiles and validations of the module's selected tests when the module starts: they run in the
-    background (conftest.ToolRuns) while the tests compare numbers, and each test takes its own when it needs it.
+    background (background.ToolRuns) while the tests compare numbers, and each test takes its own when it needs it.
     The lists above only decide what is queued early; a test builds whatever it needs itself."""
-    if not tool_runs.eager:
-        return
     wanted = selected_names(request)
-    prefetch_runs(tool_runs, itertools.chain(c_jobs(exported, wanted), shader_jobs(exported, wanted)))
+    tool_runs.prefetch(itertools.chain(c_jobs(exported, wanted), shader_jobs(exported, wanted)))
 
 
 # --------------------------------------------------------------------------- #

@@ -11,7 +11,7 @@ except near a tie; GLSL and HLSL must pass ``glslangValidator`` (skipped where t
 tool is missing). A corrupted table is the negative control: the comparison must
 catch it.
 
-Compiles and validations go through the session's :class:`conftest.ToolRuns` (each
+Compiles and validations go through the session's :class:`background.ToolRuns` (each
 distinct one once), queued when the module starts (:func:`_prefetch`).
 ``python tests/test_export_dering.py`` prints the float build's agreement with Python.
 """
@@ -29,7 +29,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import GLSLANG, L_OF, RUN_DIR, ToolJob, ToolRuns, light, random_functions, sky_samples
+from background import GLSLANG, RUN_DIR, ToolJob, ToolRuns
+from conftest import L_OF, light, random_functions, sky_samples
 
 from skysh import dering, export_dering, sh
 
@@ -192,7 +193,7 @@ def jobs() -> Iterator[ToolJob]:
 
 @pytest.fixture(scope="module", autouse=True)
 def _prefetch(tool_runs: ToolRuns) -> None:
-    """Queue the module's compiles and validations when it starts (conftest.ToolRuns): they run in the background
+    """Queue the module's compiles and validations when it starts (background.ToolRuns): they run in the background
     while the inputs are made and compared; each test takes its own when it needs it."""
     tool_runs.prefetch(jobs())
 

@@ -39,7 +39,8 @@ from typing import IO, Any
 
 import numpy as np
 import pytest
-from conftest import PLAIN_DIP, dc_relative_error, engine_cases, is_padded_identity, selected_names
+from background import selected_names
+from conftest import PLAIN_DIP, dc_relative_error, engine_cases, is_padded_identity
 
 from skysh import SkySH, sh, shmin
 from skysh.export import export_source

@@ -20,7 +20,7 @@ Error measure: as ``tests/test_export.py`` (largest |export - runtime| over |DC|
 channel, worst channel); the sun's light: |direction| difference, and the RGB difference over
 the largest channel. ``python tests/test_export_lights.py`` prints the measured figures.
 
-Compiles and validations go through the session's :class:`conftest.ToolRuns` (each distinct
+Compiles and validations go through the session's :class:`background.ToolRuns` (each distinct
 one once: the harness, :data:`C_HARNESS`, is also tests/test_export.py's, so the builds of the
 same headers are shared in one process); the module queues them all when it starts (:func:`_prefetch`).
 """
@@ -41,18 +41,8 @@ from typing import Any
 
 import numpy as np
 import pytest
-from conftest import (
-    GLSLANG,
-    PLAIN_DIP,
-    RUN_DIR,
-    Exported,
-    ToolJob,
-    ToolRuns,
-    dc_relative_error,
-    glslang_job,
-    prefetch_runs,
-    selected_names,
-)
+from background import GLSLANG, RUN_DIR, ToolJob, ToolRuns, glslang_job, selected_names
+from conftest import PLAIN_DIP, Exported, dc_relative_error
 
 from skysh import SkySH, preetham, sh, shmin
 from skysh.export import export_source, export_tables
@@ -292,9 +282,9 @@ def jobs(request: pytest.FixtureRequest, exported: Exported) -> Iterator[ToolJob
 
 @pytest.fixture(scope="module", autouse=True)
 def _prefetch(request: pytest.FixtureRequest, exported: Exported, tool_runs: ToolRuns) -> None:
-    """Queue the module's compiles and validations when it starts (conftest.ToolRuns): they run in the background
+    """Queue the module's compiles and validations when it starts (background.ToolRuns): they run in the background
     while the tests compare numbers; each test takes its own when it needs it (or builds it then)."""
-    prefetch_runs(tool_runs, jobs(request, exported))
+    tool_runs.prefetch(jobs(request, exported))
 
 
 # --------------------------------------------------------------------------- #

@@ -22,9 +22,9 @@ from collections.abc import Iterator
 
 import numpy as np
 import pytest
+from background import Prefetched, prefetched, start_early
 from conftest import EPS, dc_relative_error, python_without_matplotlib
 from scipy.special import sph_harm_y
-from test_startup import Prefetched, prefetched, start_early
 
 from skysh import preetham, sh
 

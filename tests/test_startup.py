@@ -19,35 +19,23 @@ interpreter start instead of seven), and each test asserts on its own step:
 
 The wall time of ``skysh coeffs`` against ``python -c "import numpy"`` (a speed goal, not a
 test) is printed by ``python benchmarks/bench_startup.py``.
-
-:class:`Prefetched` (jobs started when a module begins, awaited by its tests) is shared with
-the other subprocess-bound test files (test_cli, test_preetham, test_sunlight, test_viewer,
-test_engines).
 """
 
 from __future__ import annotations
 
 import json
 import os
-import re
-import signal
 import subprocess
 import sys
-import threading
-import urllib.request
-from collections.abc import Callable, Iterator, Mapping
-from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
-from typing import Any, Generic, TypeVar
+from typing import Any
 
 import pytest
-from conftest import ROOT, modules_stay_whole
+from conftest import ROOT
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import bench_startup
-
-T = TypeVar("T")
 
 FORBIDDEN: tuple[str, ...] = ("colour", "matplotlib", "skysh.fit", "tools", "tqdm")
 """Top-level names (and prefixes) that the light paths must not import."""
@@ -58,98 +46,6 @@ STEP_MARK: str = "test_startup step done: "
 
 PROBE_TIMEOUT_S: float = 300.0
 """Hang guard of the probe interpreter (its time is mostly colour-science's import, in the render step)."""
-
-
-class Prefetched(Generic[T]):
-    """Jobs (name -> function of no arguments) started on background threads when a module begins, so that
-    the module's other tests overlap them; :meth:`result` waits for one (issue 14).
-
-    ``eager`` False (pytest-xdist sharing a module between processes: conftest.modules_stay_whole) starts
-    nothing ahead: :meth:`result` then runs a job the first time a test asks for it. Each job runs once; its
-    exception is raised in every test that asks for its result, so each test fails for itself. Jobs run
-    subprocesses, or compute from fixed inputs (numpy releases the interpreter lock in its array loops); they
-    change nothing, read nothing that the module's tests change, and leave process-wide state alone (no
-    import that changes warning filters: warnings.catch_warnings is not thread-safe).
-    """
-
-    def __init__(self, jobs: Mapping[str, Callable[[], T]], eager: bool) -> None:
-        self._jobs = dict(jobs)
-        self._pool = ThreadPoolExecutor(max_workers=max(1, len(self._jobs)), thread_name_prefix="prefetched")
-        self._futures: dict[str, Future[T]] = {}
-        self._lock = threading.Lock()
-        if eager:
-            for name in self._jobs:
-                self._start(name)
-
-    def _start(self, name: str) -> Future[T]:
-        with self._lock:
-            if name not in self._futures:
-                self._futures[name] = self._pool.submit(self._jobs[name])
-            return self._futures[name]
-
-    def result(self, name: str) -> T:
-        """The job's return value, waiting for it (started now if it was not)."""
-        return self._start(name).result()
-
-    def close(self) -> None:
-        """Wait for the running jobs (each has its own hang guard); drop those never started."""
-        self._pool.shutdown(wait=True, cancel_futures=True)
-
-
-def prefetched(request: pytest.FixtureRequest, jobs: Mapping[str, Callable[[], T]]) -> Iterator[Prefetched[T]]:
-    """Body of a module fixture (``yield from``): ``jobs`` as a :class:`Prefetched`, eager when the module stays in
-    this process (conftest.modules_stay_whole; True without pytest-xdist), closed at the module's end."""
-    jobs_ = Prefetched(jobs, eager=modules_stay_whole(request.config))
-    try:
-        yield jobs_
-    finally:
-        jobs_.close()
-
-
-def start_early(request: pytest.FixtureRequest, *fixtures: str) -> None:
-    """In a module's autouse fixture: set up the module fixtures ``fixtures`` now, at the module's first test, when
-    the module stays in this process and a test of it selected in this session asks for one of them (so their
-    background jobs overlap the module's other tests; a run of other tests of the module starts nothing)."""
-    if modules_stay_whole(request.config):
-        for name in fixtures:
-            if asked_for(request, name):
-                request.getfixturevalue(name)
-
-
-def asked_for(request: pytest.FixtureRequest, fixture: str) -> bool:
-    """Whether a test of the requesting module selected in this session asks for ``fixture`` (directly or not)."""
-    return any(getattr(item, "module", None) is request.module and fixture in getattr(item, "fixturenames", ())
-               for item in request.session.items)
-
-
-SERVER_START_TIMEOUT_S: float = 180.0
-"""Hang guard of a server subprocess's start (imports, the coefficient file and colour-science on a shared
-machine), and of each step after it."""
-
-
-def server_session(argv: list[str], cwd: Path = ROOT) -> dict[str, Any]:
-    """Run a server command (``python -m skysh view``, ``serve()``): the first line it prints, one GET of the
-    loopback address in it (status and body), then Ctrl-C (SIGINT): its exit status, stdout and stderr. None
-    (b"" for the body) where a step was not reached."""
-    process = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=cwd)
-    timer = threading.Timer(SERVER_START_TIMEOUT_S, process.kill)
-    timer.start()
-    session: dict[str, Any] = {"line": "", "status": None, "body": b"", "code": None, "out": None, "err": None}
-    try:
-        session["line"] = process.stdout.readline() if process.stdout else ""
-        address = re.search(r"http://127\.0\.0\.1:\d+/", session["line"])
-        if address:
-            with urllib.request.urlopen(address.group(0), timeout=SERVER_START_TIMEOUT_S) as response:
-                session["status"], session["body"] = response.status, response.read()
-            process.send_signal(signal.SIGINT)
-            session["out"], session["err"] = process.communicate(timeout=SERVER_START_TIMEOUT_S)
-            session["code"] = process.returncode
-    finally:
-        timer.cancel()
-        if process.poll() is None:
-            process.kill()
-            process.communicate()
-    return session
 
 
 def _env() -> dict[str, str]:

@@ -28,10 +28,10 @@ from collections.abc import Iterator
 
 import numpy as np
 import pytest
+from background import Prefetched, prefetched, start_early
 from conftest import python_without_matplotlib
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from test_startup import Prefetched, prefetched, start_early
 
 from skysh import coefficient_file as cf
 from skysh import solar, sunlight

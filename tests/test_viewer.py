@@ -50,8 +50,8 @@ from typing import Any
 
 import numpy as np
 import pytest
+from background import Prefetched, asked_for, prefetched, server_session, start_early
 from conftest import NO_MATPLOTLIB, load_script
-from test_startup import Prefetched, asked_for, prefetched, server_session, start_early
 
 from skysh import SkySH, engines, preetham, render, sh, viewer
 
@@ -746,7 +746,7 @@ def test_server_serves_the_page_files_and_nothing_else(server: Any, static_dir: 
 
 @pytest.fixture(scope="module")
 def serve_run(request: pytest.FixtureRequest) -> Iterator[Prefetched[dict[str, Any]]]:
-    """``serve()`` in a subprocess (test_startup.server_session), in the background from the module's start; as on a
+    """``serve()`` in a subprocess (background.server_session), in the background from the module's start; as on a
     plain install (skysh's dependencies: colour-science without matplotlib, whose import it then skips)."""
     argv = [sys.executable, "-c", NO_MATPLOTLIB + "from skysh.viewer import serve; serve()"]
     yield from prefetched(request, {"serve": functools.partial(server_session, argv, Path.cwd())})
