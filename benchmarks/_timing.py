@@ -4,6 +4,7 @@ Timing shared by the benchmark scripts
 
 -   :func:`interleaved_best`: best seconds per call of several cases measured in
     turns, so a change in the shared machine's load hits a case and its baseline alike.
+-   :func:`environment`: the "environment" line every script prints first.
 
 The scripts run as ``python benchmarks/bench_x.py`` (this folder is then first on
 ``sys.path``), so they import this module as ``_timing``.
@@ -12,11 +13,16 @@ The scripts run as ``python benchmarks/bench_x.py`` (this folder is then first o
 from __future__ import annotations
 
 import math
+import os
+import platform
 import time
 import timeit
 from collections.abc import Callable
+from typing import Any
 
-__all__ = ["interleaved_best"]
+import numpy as np
+
+__all__ = ["interleaved_best", "environment"]
 
 
 def interleaved_best(cases: dict[str, Callable[[], object]], repeats: int, run_seconds: float,
@@ -39,3 +45,11 @@ def interleaved_best(cases: dict[str, Callable[[], object]], repeats: int, run_s
         for name, timer in timers.items():
             best[name] = min(best[name], timer.timeit(numbers[name]) / numbers[name])
     return best
+
+
+def environment(**settings: Any) -> dict[str, Any]:
+    """The "environment" record a script prints first: Python and numpy versions, CPUs, the 1-minute load
+    average (None where the system has none), then the script's own ``settings``."""
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else None
+    return {"bench": "environment", "python": platform.python_version(), "numpy": np.__version__,
+            "cpus": os.cpu_count(), "loadavg_1min": load, **settings}

@@ -36,13 +36,10 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import platform
 import time
 from collections.abc import Callable
 
-import numpy as np
-from _timing import interleaved_best
+from _timing import environment, interleaved_best
 
 from skysh import engines
 from skysh.runtime import SkySH
@@ -65,11 +62,7 @@ def main(argv: list[str] | None = None) -> int:
 
     sky = SkySH.load()
     c = sky.coefficients(0.5, 3.0, 1.0, bands=3)
-    print(json.dumps({
-        "bench": "environment", "python": platform.python_version(), "numpy": np.__version__,
-        "cpus": os.cpu_count(), "loadavg_1min": os.getloadavg()[0] if hasattr(os, "getloadavg") else None,
-        "repeats": args.repeats, "clock": args.clock,
-    }), flush=True)
+    print(json.dumps(environment(repeats=args.repeats, clock=args.clock)), flush=True)
     for engine in args.engine or engines.ENGINES:
         t = interleaved_best({
             "call": lambda: sky.coefficients(0.5, 3.0, 1.0, bands=3),

@@ -31,8 +31,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
-import platform
 from typing import Any
 
 import _timing
@@ -66,9 +64,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
 
     sky = SkySH.load()
-    environment = {"bench": "environment", "python": platform.python_version(), "numpy": np.__version__,
-                   "cpus": os.cpu_count(), "loadavg_1min": os.getloadavg()[0] if hasattr(os, "getloadavg") else None,
-                   "repeats": args.repeats, "batch": args.batch}
+    environment = _timing.environment(repeats=args.repeats, batch=args.batch)
     coefficients = sky.coefficients
     radiance = "sky.coefficients(0.5, 3.0, 1.0, bands=3)"
     t = _timing.interleaved_best({

@@ -57,8 +57,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
-import platform
 from collections.abc import Callable
 
 import _timing
@@ -101,11 +99,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
 
     sky = SkySH.load()
-    print(json.dumps({
-        "bench": "environment", "python": platform.python_version(), "numpy": np.__version__, "cpus": os.cpu_count(),
-        "loadavg_1min": os.getloadavg()[0] if hasattr(os, "getloadavg") else None, "repeats": args.repeats,
-        "batch": args.batch,
-    }), flush=True)
+    print(json.dumps(_timing.environment(repeats=args.repeats, batch=args.batch)), flush=True)
 
     coefficients = sky.coefficients
     table = np.random.default_rng(args.seed).standard_normal((14, 144))

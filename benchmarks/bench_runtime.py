@@ -42,8 +42,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
-import platform
 import timeit
 from collections.abc import Callable
 
@@ -100,12 +98,8 @@ def main(argv: list[str] | None = None) -> int:
 
     sky = SkySH.load()
     n_terms = (sky.table.max_degrees[0] + 1) * (sky.table.max_degrees[1] + 1)
-    print(json.dumps({
-        "bench": "environment", "python": platform.python_version(), "numpy": np.__version__,
-        "cpus": os.cpu_count(), "loadavg_1min": os.getloadavg()[0] if hasattr(os, "getloadavg") else None,
-        "file_degrees": list(sky.table.max_degrees), "n_terms": n_terms, "repeats": args.repeats,
-        "batch": args.batch,
-    }), flush=True)
+    print(json.dumps(_timing.environment(file_degrees=list(sky.table.max_degrees), n_terms=n_terms, repeats=args.repeats,
+                                  batch=args.batch)), flush=True)
 
     rng = np.random.default_rng(args.seed)
     ts = rng.uniform(0.0, math.pi / 2.0, args.batch)

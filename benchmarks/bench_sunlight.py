@@ -30,8 +30,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
-import platform
 import timeit
 from collections.abc import Callable
 
@@ -72,11 +70,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
 
     sky, sun = SkySH.load(), SunLight.load()
-    print(json.dumps({
-        "bench": "environment", "python": platform.python_version(), "numpy": np.__version__, "cpus": os.cpu_count(),
-        "loadavg_1min": os.getloadavg()[0] if hasattr(os, "getloadavg") else None, "sun_degrees": list(sun.degrees),
-        "repeats": args.repeats, "batch": args.batch,
-    }), flush=True)
+    print(json.dumps(_timing.environment(sun_degrees=list(sun.degrees), repeats=args.repeats, batch=args.batch)), flush=True)
 
     t = interleaved_best({
         "sky": lambda: sky.coefficients(0.5, 3.0, 1.0, bands=1),
