@@ -4,9 +4,9 @@ Cost of deringing against the runtime's coefficients call
 
 The issue's budgets, each printed beside its measurement:
 
--   one 3-band RGB sky result, ``dering(sky)``, at most 5x one
+-   one 3-band RGB sky result, ``dering(sky)``, at most 7x one
     ``SkySH.coefficients(0.5, 3.0, 1.0, bands=3, gibbs=False)`` call when no window is
-    needed (the same sky with the Gibbs filter) and 10x when one is (without it; and
+    needed (the same sky with the Gibbs filter) and 15x when one is (without it; and
     three HDR delta lights);
 -   a batch of 10^4 3-band functions (HDR lights, all needing a window) at most 20 us
     per item;
@@ -39,9 +39,10 @@ from skysh import SkySH, dering, sh
 SUN: tuple[float, float, float] = (0.5, 3.0, 1.0)
 """(sun_zenith rad, turbidity, sun_azimuth rad) of the reference call and the timed sky."""
 
-BUDGETS: dict[str, float] = {"no window": 5.0, "window": 10.0, "batch us/item": 20.0, "4-7 bands ms": 2.0,
+BUDGETS: dict[str, float] = {"no window": 7.0, "window": 15.0, "batch us/item": 20.0, "4-7 bands ms": 2.0,
                              "first call ms": 20.0}
-"""The issue's budgets."""
+"""The budgets in force: issue 20's, with one 3-band deringing restated (issue 26) from 5x / 10x a call to 7x
+without and 15x with a window (the exact minimum is a batched ``eigh`` and about forty numpy calls)."""
 
 FRESH_SCRIPT: str = """
 import time

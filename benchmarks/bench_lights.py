@@ -12,12 +12,12 @@ rounds find the quiet moments of a shared machine that a few long runs miss.
 2.  ``lit_radiance``: ``sky.coefficients(0.5, 3.0, 1.0, bands=3, sun=True,
     ground_albedo=0.3)`` vs the same call without the sun and the ground (the
     radiance defaults: Gibbs filter on, no deringing; the fused path of
-    :class:`skysh.lights.LitPlan`). Target: ratio <= 1.3.
+    :class:`skysh.lights.LitPlan`). Target: ratio <= 1.8.
 3.  ``lit_irradiance``: the same with ``irradiance=True`` (deringing on: the
-    sky is deringed alone, then the sun and the ground are added). Target: ratio <= 1.3.
-4.  ``lit_rgb_albedo``: case 2 with ``ground_albedo=(0.2, 0.3, 0.4)``. Target: ratio <= 1.3.
+    sky is deringed alone, then the sun and the ground are added). Target: ratio <= 1.8.
+4.  ``lit_rgb_albedo``: case 2 with ``ground_albedo=(0.2, 0.3, 0.4)``. Target: ratio <= 1.8.
 5.  ``lit_batch``: case 2 on arrays of ``--batch`` frames vs the sky alone on
-    the same arrays. Target: ratio <= 1.3.
+    the same arrays. Target: ratio <= 1.8.
 6.  ``floor``: for context, case 2's sky call vs one ``np.dot`` of a (14,) vector
     and a (14, 144) matrix (the 3-band table's first contraction) and the
     cheapest numpy call (``np.cos`` of one float), so a reader can count how
@@ -47,7 +47,7 @@ Timings are wall time: on a loaded machine run it a few times and compare.
 Targets are reported, never enforced (exit status 0). One JSON object per line::
 
     {"bench": "lit_radiance", "runtime_s": ..., "baseline": "...", "baseline_s": ..., "ratio": ...,
-     "target": "ratio <= 1.3", "met": true}
+     "target": "ratio <= 1.8", "met": true}
 
 Run: ``PYTHONPATH=. python benchmarks/bench_lights.py [--repeats 200] [--batch 10000]``.
 """
@@ -67,8 +67,9 @@ from skysh.runtime import SkySH
 SUN_LIGHT_TARGET: float = 1.5
 """Issue 15: ``sun_light`` <= 1.5 x a 1-band ``coefficients`` call."""
 
-LIT_TARGET: float = 1.3
-"""Issue 15: ``sun=True, ground_albedo=...`` adds <= 30 % to a 3-band call."""
+LIT_TARGET: float = 1.8
+"""``sun=True, ground_albedo=...`` costs <= 1.8 x a 3-band call (issue 15 asked 1.3; restated in issue 26:
+the sky's c_10 and the sun's colour come first, about a dozen numpy calls)."""
 
 RUN_SECONDS: float = 0.002
 """Approximate length of one timed round; the loop count is chosen to reach it."""

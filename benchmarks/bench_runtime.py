@@ -11,9 +11,11 @@ in one run, so the ratios do not depend on the machine's speed:
     floats: the scalar fast path) vs one numpy matrix-vector product with
     ``A`` of shape (112, 3 N^2) (112 = terms of degree (13, 7); (112, 147) at
     N = 7), the faster of ``v @ A`` and ``np.dot(v, A)`` (``np.dot`` has less
-    per-call overhead, so the floor is the honest one). Target: ratio <= 3.
+    per-call overhead, so the floor is the honest one). Target: ratio <= 3.5
+    (restated from 3 in issue 26: the scalar call is at numpy's per-call floor).
 2.  ``batch``: one call with arrays of 10^5 parameter sets vs the batched
-    product ``(10^5, 112) @ (112, 3 N^2)`` alone. Target: ratio <= 1.5.
+    product ``(10^5, 112) @ (112, 3 N^2)`` alone. Target: ratio <= 2.75 (restated
+    from 1.5 in issue 23: the design matrix and the rotation pass are bound by memory).
 3.  ``scalar_types``: one 3-band call with an int turbidity, numpy float64
     parameters and 0-d arrays vs the same call with Python floats (every real
     scalar takes the fast path). Target: ratio <= 1.3 each.
@@ -32,7 +34,7 @@ the script always exits 0.
 Output, one JSON object per line::
 
     {"bench": "single", "bands": 7, "runtime_s": ..., "baseline": "min(v @ A, np.dot(v, A)), A (112, 147)",
-     "baseline_s": ..., "ratio": ..., "target": "ratio <= 3", "met": true}
+     "baseline_s": ..., "ratio": ..., "target": "ratio <= 3.5", "met": true}
 
 Run: ``PYTHONPATH=. python benchmarks/bench_runtime.py [--repeats 7] [--batch 100000]``.
 """
@@ -55,8 +57,8 @@ BANDS: tuple[int, ...] = (7, 3)
 """Band counts measured: the file's maximum and the diffuse-lighting choice."""
 
 TARGETS: dict[str, tuple[str, float]] = {
-    "single": ("<=", 3.0),
-    "batch": ("<=", 1.5),
+    "single": ("<=", 3.5),
+    "batch": ("<=", 2.75),
     "reference": (">=", 1e4),
     "scalar_types": ("<=", 1.3),
 }

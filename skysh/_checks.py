@@ -6,6 +6,7 @@ Input checks shared by every public function of skysh
     complex numbers, objects and ragged lists.
 -   :func:`check_range`: refuse values outside a closed interval, naming the parameter.
 -   :func:`check_scalar`: one real number (optionally in a closed interval).
+-   :func:`check_cutoff`: a window's cutoff band, a real number > 0 or inf.
 -   :func:`check_dirs`: refuse direction arrays that are not (..., 3) unit vectors.
 -   :func:`check_bands`: refuse a band count outside [1, max].
 -   :func:`check_coeffs`: refuse SH coefficients that are not (K,), (K, C) or (..., K, C), K = N**2.
@@ -15,6 +16,7 @@ Input checks shared by every public function of skysh
 -   :func:`check_choice`: refuse a name that is not one of the valid ones, listing them.
 -   :func:`check_flag`: refuse anything but ``bool`` / ``numpy.bool_`` (a TypeError).
 -   :func:`number_text`: a float as text that reads back exactly (for messages).
+-   :func:`integer_text`: an integer beyond float64 by its size (for messages).
 -   :func:`interval_text`: a closed interval as the documentation writes it ("[2.5, 6]", "[0, pi/2]").
 -   :func:`short_repr`: a one-line, bounded repr of any value (for messages).
 
@@ -43,6 +45,7 @@ __all__ = [
     "as_float_array",
     "check_range",
     "check_scalar",
+    "check_cutoff",
     "check_dirs",
     "check_bands",
     "check_coeffs",
@@ -52,6 +55,7 @@ __all__ = [
     "check_flag",
     "check_choice",
     "number_text",
+    "integer_text",
     "interval_text",
     "short_repr",
     "read_only",
@@ -65,11 +69,22 @@ refused at once with a ValueError naming the parameter, instead of a MemoryError
 _NOT_A_NUMBER: str = "must be a real number or an array of real numbers"
 
 
+def integer_text(value: int) -> str:
+    """An integer beyond float64 described by its size ("an integer of 401 digits"): its repr may be
+    thousands of digits, or refused by Python's limit on int-to-text conversion (4300 digits)."""
+    digits = max(1, int(abs(value).bit_length() * math.log10(2.0)))  # the count, or one less
+    digits += abs(value) >= 10**digits
+    return f"an integer of {digits} digits"
+
+
 def number_text(value: Any) -> str:
-    """``value`` as text that reads back as the same float ("90", "90.0000001", "inf"), or its repr."""
+    """``value`` as text that reads back as the same float ("90", "90.0000001", "inf"), its size for an
+    integer beyond float64 (:func:`integer_text`), or its repr."""
     try:
         x = float(value)
-    except (TypeError, ValueError, OverflowError):
+    except OverflowError:
+        return integer_text(value) if isinstance(value, int) else short_repr(value)
+    except (TypeError, ValueError):
         return repr(value)
     if x.is_integer() and abs(x) < 1e16:
         return str(int(x))
@@ -92,8 +107,14 @@ def interval_text(low: float, high: float, pi: bool = False) -> str:
 
 
 def short_repr(value: Any) -> str:
-    """A repr of ``value`` short enough for one line of a message."""
-    text = repr(value) if not isinstance(value, np.ndarray) or value.size <= 6 else f"array of shape {value.shape}"
+    """A repr of ``value`` short enough for one line of a message (an int beyond float64 by its size, a value
+    whose repr fails, e.g. a list holding an int of more than 4300 digits, by its type)."""
+    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 1024:
+        return integer_text(value)
+    try:
+        text = repr(value) if not isinstance(value, np.ndarray) or value.size <= 6 else f"array of shape {value.shape}"
+    except Exception as error:  # any repr may fail; the message must still name the parameter
+        return f"a {type(value).__name__} (its repr fails: {type(error).__name__})"
     text = " ".join(text.split())
     return text if len(text) <= 80 else text[:77] + "..."
 
@@ -104,7 +125,7 @@ def as_float_array(value: ArrayLike, name: str) -> NDArray[np.float64]:
         try:
             value = float(value)
         except OverflowError:
-            raise ValueError(f"{name} must be finite (a float64), got an integer of {len(str(value))} digits") from None
+            raise ValueError(f"{name} must be finite (a float64, |x| <= 1.8e308), got {integer_text(value)}") from None
     try:
         raw = np.asarray(value)
     except (TypeError, ValueError) as error:  # ragged nested lists: numpy's "inhomogeneous shape"
@@ -136,6 +157,21 @@ def check_scalar(value: Any, name: str, low: float = -math.inf, high: float = ma
     if array.ndim:
         raise ValueError(f"{name} must be a scalar (one number), got an array of shape {array.shape}")
     return float(array)
+
+
+def check_cutoff(cutoff: Any, name: str = "cutoff") -> float:
+    """Return a window's cutoff w (factors are 0 for bands l >= w) as a float: a real number > 0, or inf
+    (no windowing); a ValueError naming ``name`` for anything else (a flag, text, NaN, an int beyond float64)."""
+    if isinstance(cutoff, (bool, np.bool_)) or not isinstance(cutoff, (int, float, np.integer, np.floating)):
+        raise ValueError(f"{name} must be a real number > 0 (a band index, or inf), got {short_repr(cutoff)}")
+    try:
+        w = float(cutoff)
+    except OverflowError:  # a Python int beyond float64
+        raise ValueError(f"{name} must be a real number > 0 within float64 (a band index, or inf), got "
+                         f"{number_text(cutoff)}") from None
+    if not w > 0.0:
+        raise ValueError(f"{name} must be > 0 (a band index, or inf), got {cutoff!r}")
+    return w
 
 
 def check_size(count: int, name: str, what: str = "") -> None:
@@ -170,7 +206,8 @@ def check_count(value: Any, name: str, low: int, high: int) -> int:
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
         raise ValueError(f"{name} must be an integer in [{low}, {high}], got {short_repr(value)}")
     if not low <= int(value) <= high:
-        raise ValueError(f"{name} must be an integer in [{low}, {high}], got {int(value)}")
+        shown = int(value) if int(value).bit_length() <= 1024 else integer_text(int(value))  # str() refuses > 4300 digits
+        raise ValueError(f"{name} must be an integer in [{low}, {high}], got {shown}")
     return int(value)
 
 

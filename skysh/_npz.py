@@ -12,7 +12,7 @@ bytes whose every step is bounded and whose every refusal is a
 -   :func:`read_bytes`: a regular file of bounded size, opened non-blocking.
 -   :func:`directory`, :func:`check_declared`: the zip directory, checked before any member is read.
 -   :func:`payload`, :func:`inflate`, :func:`array`: one member's bytes (bounded), then its array (no pickles).
--   :func:`as_path`, :func:`write_atomic`: a path argument; a file written whole or not at all.
+-   :func:`as_path`: a path argument (files are written by :func:`skysh.files.write_atomic`).
 
 References: PKWARE APPNOTE 6.3 (sections 4.3.7, 4.3.12, 4.3.16); the ``.npy``
 format 1.0 (numpy.lib.format).
@@ -25,7 +25,6 @@ import math
 import os
 import stat
 import struct
-import threading
 import zlib
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
@@ -37,7 +36,7 @@ from numpy.lib import format as npy_format
 from numpy.typing import NDArray
 
 __all__ = ["CoefficientFileError", "NPY_HEADER_MAX", "NOT_NPZ", "STORED", "DEFLATED", "Member", "zip_bytes", "encode",
-           "directory", "check_declared", "inflate", "payload", "array", "as_path", "read_bytes", "write_atomic"]
+           "directory", "check_declared", "inflate", "payload", "array", "as_path", "read_bytes"]
 
 
 class CoefficientFileError(ValueError):
@@ -228,20 +227,6 @@ def as_path(path: Any, name: str = "path") -> Path:
         return Path(path)
     except TypeError as error:  # a PathLike returning bytes
         raise CoefficientFileError(f"{name} must name a file as text: {error}") from None
-
-
-def write_atomic(path: Path, data: bytes) -> Path:
-    """Write ``data`` to a temporary file beside ``path`` and rename it over ``path`` (never half written)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    temporary = path.with_name(f".{path.name}.{os.getpid()}.{threading.get_ident()}.tmp")
-    try:
-        with open(temporary, "xb") as handle:  # exclusive; mode from the umask
-            handle.write(data)
-        os.replace(temporary, path)
-    finally:
-        if temporary.exists():
-            temporary.unlink()
-    return path
 
 
 def _not_regular(path: Path, mode: int) -> CoefficientFileError:

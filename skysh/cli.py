@@ -45,7 +45,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
-from skysh.argtypes import integer
+from skysh.argtypes import integer, real
 from skysh.cli_text import (
     TABLE_ZERO_BELOW,
     format_coefficients,
@@ -108,18 +108,8 @@ class _Parser(argparse.ArgumentParser):
         raise _UsageError(f"{message} (see '{self.prog} --help')")
 
 
-def _finite(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
-    return value
-
-
 def _positive(text: str) -> float:
-    value = _finite(text)
+    value = real(text)
     if value <= 0.0:
         raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
     return value
@@ -131,7 +121,7 @@ _bands = integer(1)
 
 def _albedo(text: str) -> float | tuple[float, ...]:
     """``--ground-albedo``: one number or R,G,B, each in [0, 1]."""
-    values = tuple(_finite(part) for part in text.split(","))
+    values = tuple(real(part) for part in text.split(","))
     if len(values) not in (1, 3) or not all(0.0 <= v <= 1.0 for v in values):
         raise argparse.ArgumentTypeError(f"expected one number or R,G,B, each in [0, 1], got {text!r}")
     return values[0] if len(values) == 1 else values
@@ -140,6 +130,9 @@ def _albedo(text: str) -> float | tuple[float, ...]:
 _width = integer(*RENDER_WIDTH_RANGE)
 """``skysh render --width``."""
 
+_port = integer(0, 65535)
+"""``skysh view --port``: a TCP port (0: a free one)."""
+
 
 # --------------------------------------------------------------------------- #
 # Parser
@@ -147,15 +140,15 @@ _width = integer(*RENDER_WIDTH_RANGE)
 def _add_sun(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("the sun (either its angles, or a place and a time)", "Frame: +X = East, +Y = "
                                       "North, +Z = up; azimuth from +X towards +Y (East 0, North 90, South -90).")
-    group.add_argument("--sun-zenith", type=_finite, metavar="DEG", help=f"sun zenith angle, degrees, {_sun_zenith_range()} (0 = "
+    group.add_argument("--sun-zenith", type=real, metavar="DEG", help=f"sun zenith angle, degrees, {_sun_zenith_range()} (0 = "
                        "overhead, 90 = on the horizon)")
-    group.add_argument("--sun-azimuth", type=_finite, metavar="DEG", help="sun azimuth, degrees, any finite value (default 0)")
-    group.add_argument("--lat", type=_finite, metavar="DEG", help="latitude, degrees, [-90, 90], positive North (with --lon and "
+    group.add_argument("--sun-azimuth", type=real, metavar="DEG", help="sun azimuth, degrees, any finite value (default 0)")
+    group.add_argument("--lat", type=real, metavar="DEG", help="latitude, degrees, [-90, 90], positive North (with --lon and "
                        "--time)")
-    group.add_argument("--lon", type=_finite, metavar="DEG", help="longitude, degrees, [-180, 180], positive East")
+    group.add_argument("--lon", type=real, metavar="DEG", help="longitude, degrees, [-180, 180], positive East")
     group.add_argument("--time", metavar="ISO8601", help="time with a UTC offset, e.g. 2024-06-21T12:00:00+02:00 or ...Z; the "
                        "sun must be above the horizon")
-    parser.add_argument("--turbidity", type=_finite, required=True, metavar="T",
+    parser.add_argument("--turbidity", type=real, required=True, metavar="T",
                         help=f"atmospheric turbidity, {_turbidity_range()} (the fitted domain)")
 
 
@@ -268,8 +261,8 @@ def _add_view_parser(commands: Any) -> None:
     )
     view.add_argument("--out", type=Path, default=None, metavar="DIR", help="write the page's files into DIR instead of serving "
                       "them")
-    view.add_argument("--port", type=int, default=None, metavar="N", help="TCP port on 127.0.0.1, [0, 65535]; default 0 (a free "
-                      "one)")
+    view.add_argument("--port", type=_port, default=None, metavar="N", help="TCP port on 127.0.0.1, [0, 65535]; default 0 "
+                      "(a free one)")
     view.add_argument("--open", action="store_true", help="open the page in the default browser")
     view.set_defaults(handler=_cmd_view)
 
@@ -505,11 +498,25 @@ def _check_engine_options(args: argparse.Namespace, sky: Any) -> None:
                           f"{args.bands}")
 
 
-def _write_text(path: Path, text: str) -> None:
-    if str(path) == "-":
-        sys.stdout.write(text)
-    else:
-        path.write_text(text)
+def _output(path: Path, flag: str = "--out", folder: bool = False) -> Path:
+    """``path`` checked as an output file (or ``folder``; never one of skysh's own files), else a usage error."""
+    from skysh import files
+
+    try:
+        return files.check_output(path, flag, folder=folder)
+    except (TypeError, ValueError) as error:
+        raise _UsageError(str(error)) from None
+
+
+def _write(outputs: dict[Path, bytes], flag: str = "--out") -> None:
+    """Write every file whole (temporary files beside them, renamed when all are complete), or none."""
+    from skysh import files
+
+    try:
+        files.write_together(outputs)
+    except OSError as error:  # a full disk, a file-size limit, a missing permission: the targets are as they were
+        raise _UsageError(f"{flag} {error.filename or next(iter(outputs))}: cannot write: {error.strerror or error} "
+                          "(nothing was written)") from None
 
 
 def _cmd_export(args: argparse.Namespace) -> int:
@@ -529,18 +536,27 @@ def _cmd_export(args: argparse.Namespace) -> int:
         limit = engines.ENGINE_MAX_BANDS[args.engine]
         if args.bands is not None and args.bands > limit:
             raise _UsageError(f"--bands must be at most {limit} for --engine {args.engine}, got {args.bands}")
-    text = export_source(sky, args.format, bands=args.bands, real=args.c_real, engine=args.engine)
-    _write_text(args.out, text)
-    written = [str(args.out)]
-    if args.format == "js" and str(args.out) != "-":
-        from skysh.export_js import declarations, declarations_path
+    stdout = str(args.out) == "-"
+    outputs: dict[Path, bytes] = {}
+    if not stdout:
+        outputs[_output(args.out)] = b""
+        if args.format == "js":
+            from skysh.export_js import declarations_path
 
-        typings = declarations_path(args.out)
-        _write_text(typings, declarations(sky, args.bands))
-        written.append(str(typings))
-    if str(args.out) != "-":
-        bands = args.bands if args.bands is not None else ("1-7" if args.format == "js" else 3)
-        print(f"wrote {' and '.join(written)} ({args.format}, {bands} bands, {len(text) / 1024:.1f} KiB)")
+            outputs[_output(declarations_path(args.out), "--out (its TypeScript declarations)")] = b""
+    text = export_source(sky, args.format, bands=args.bands, real=args.c_real, engine=args.engine)
+    if stdout:
+        sys.stdout.write(text)
+        return 0
+    paths = list(outputs)
+    outputs[paths[0]] = text.encode("utf-8")
+    if args.format == "js":
+        from skysh.export_js import declarations
+
+        outputs[paths[1]] = declarations(sky, args.bands).encode("utf-8")
+    _write(outputs)
+    bands = args.bands if args.bands is not None else ("1-7" if args.format == "js" else 3)
+    print(f"wrote {' and '.join(map(str, paths))} ({args.format}, {bands} bands, {len(text) / 1024:.1f} KiB)")
     return 0
 
 
@@ -550,14 +566,15 @@ def _cmd_render(args: argparse.Namespace) -> int:
     from skysh import SkySH
     from skysh.render import render_image, write_png
 
+    out = _output(args.out)
     sky = SkySH.load()
     _check_bands(args.bands, sky)
     image = render_image(sky, sun.zenith, args.turbidity, sun.azimuth, bands=args.bands, width=args.width,
                          gibbs=not args.no_gibbs, sun=args.sun, ground_albedo=args.ground_albedo)
     try:
-        write_png(args.out, image)
+        write_png(out, image)  # whole or not at all (skysh.files)
     except OSError as error:
-        raise _UsageError(f"--out {args.out}: {error.strerror or error}") from None
+        raise _UsageError(f"--out {out}: cannot write: {error.strerror or error} (nothing was written)") from None
     print(f"wrote {args.out} ({image.shape[1]} x {image.shape[0]} pixels)")
     return 0
 
@@ -570,7 +587,12 @@ def _cmd_view(args: argparse.Namespace) -> int:
         return 0
     if args.port is not None:
         raise _UsageError("--port does not go with --out (the page is written, not served)")
-    viewer.write_static(args.out)
+    _output(args.out, folder=True)
+    try:
+        viewer.write_static(args.out)  # every file renamed into place once all are complete (skysh.files)
+    except OSError as error:
+        raise _UsageError(f"--out {args.out}: cannot write {error.filename or 'the page'}: {error.strerror or error} "
+                          "(nothing was written)") from None
     page = (args.out / "index.html").resolve().as_uri()
     print(f"wrote the viewer page: {page}")
     if args.open:
@@ -616,6 +638,12 @@ def _run_tool(command: str, argv: list[str]) -> int:
     except SystemExit as exit_:  # --help (0), or a tool's own exit
         code = exit_.code
         return code if isinstance(code, int) else (0 if code is None else 1)
+    except ModuleNotFoundError as error:  # an optional dependency of the tools (matplotlib, tqdm, cvxpy, ...)
+        package = (error.name or "").partition(".")[0]
+        if package in ("", "skysh", "tools", "report", "studies"):
+            raise
+        raise _UsageError(f"'skysh {command}' needs the Python package {package!r}, which is not installed: it comes "
+                          "with the tools extra, pip install -e \".[tools]\" (in the source checkout)") from None
     finally:
         sys.argv = saved
         argparse.ArgumentParser.error = saved_error  # type: ignore[method-assign]

@@ -89,7 +89,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from skysh import _npz, poly
+from skysh import _npz, files, poly
 from skysh._checks import check_count
 from skysh._npz import CoefficientFileError
 from skysh._version import __version__
@@ -694,4 +694,4 @@ def write(path: str | os.PathLike, sky_table: SkyTable) -> Path:
         raise CoefficientFileError(f"metadata is {len(raw)} bytes as JSON, above MAX_METADATA_BYTES = {MAX_METADATA_BYTES}")
     data = _encode(SkyTable(table, degrees, tables=sky_table.tables), raw)
     _decode(data)  # what is written reads back (every check of read, the runtime fields included)
-    return _npz.write_atomic(path, data)
+    return files.write_atomic(path, data, parents=True)

@@ -35,7 +35,15 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from skysh import sh, shmin
-from skysh._checks import as_float_array, check_bands, check_choice, check_coeffs, check_dirs, check_flag, short_repr
+from skysh._checks import (
+    as_float_array,
+    check_bands,
+    check_choice,
+    check_coeffs,
+    check_cutoff,
+    check_dirs,
+    check_flag,
+)
 from skysh.shmin import exact_min
 
 __all__ = ["DeringWarning", "DERING_TARGETS", "DERING_METHODS", "MAX_DERING_BANDS", "SEED_WINDOW_SIZES",
@@ -92,12 +100,7 @@ def sinc4_window(cutoff: float, bands: int = 3) -> NDArray[np.float64]:
     """Per-band factors (N,) of the seed's eq. (6), ``(sin(pi l / w) / (pi l / w))^4`` for
     l = 0 .. ``bands`` - 1, w = ``cutoff`` > 0 (``inf``: none); in [0, 1], 0 for l >= w."""
     bands = check_bands(bands)
-    if isinstance(cutoff, (bool, np.bool_)) or not isinstance(cutoff, (int, float, np.integer, np.floating)):
-        raise ValueError(f"cutoff must be a real number > 0 (a band index, or inf), got {short_repr(cutoff)}")
-    w = float(cutoff)
-    if not w > 0.0:
-        raise ValueError(f"cutoff must be > 0 (a band index, or inf), got {cutoff!r}")
-    x = np.arange(bands) / w
+    x = np.arange(bands) / check_cutoff(cutoff)
     return np.where(x < 1.0, np.sinc(x) ** 4, 0.0)
 
 
@@ -282,6 +285,32 @@ def _least_row(t: NDArray, rows: _Rows) -> NDArray:
     return first
 
 
+SUBNORMAL_EXPONENT: int = int(np.finfo(np.float64).minexp)
+"""-1022: a channel whose largest |coefficient| has a binary exponent ``e <= SUBNORMAL_EXPONENT``
+(:func:`numpy.frexp`, ``max |c| < 2^-1022``) has subnormal windowed coefficients that round by
+more than eps of its size: :func:`dering` decides such functions on the rounded output."""
+
+
+def _least_row_rounded(flat: NDArray, rows: _Rows) -> NDArray:
+    """:func:`_least_row` for functions (n, K, C) with a subnormal channel, decided on what
+    :func:`dering` returns: row by row, the windowed coefficients ``flat * per_coeff[r]`` as
+    rounded (a subnormal product keeps fewer digits: deciding on the exact product left
+    returned irradiance at -1e-5 of its size), normalised (exact), on row 0's exact test."""
+    row0 = _Rows(rows.table[:1], rows.per_coeff[:1], rows.per_target[:1], rows.form_cg, rows.form_q,
+                 rows.s1[:1], rows.s1sq[:1], rows.s2[:1])
+    first = np.full(len(flat), len(rows.table))
+    todo = np.arange(len(flat))
+    for row, factors in enumerate(rows.per_coeff):
+        t, _, zero = shmin.normalised(np.swapaxes(flat[todo] * factors, -1, -2))
+        t[..., 0] += zero
+        ok = _least_row(t, row0) == 0
+        first[todo[ok]] = row
+        todo = todo[~ok]
+        if todo.size == 0:
+            break
+    return first
+
+
 def dering(
     coeffs: ArrayLike, target: str = "irradiance", method: str = "table", *, return_failed: bool = False
 ) -> tuple[NDArray[np.float64], ...]:
@@ -319,7 +348,11 @@ def dering(
     negative, and one row more than the least only when a minimum lies within the
     certificate's slack of zero. The last row certifies every non-negative light, so
     ``failed`` marks coefficients of none. Each channel is first divided by a power of two
-    (exact: decisions are scale-invariant). Vectorised; one input is a batch of one.
+    (exact: decisions are scale-invariant). A function with a channel below 2^-1022 in
+    every coefficient (:data:`SUBNORMAL_EXPONENT`) is decided on its windowed coefficients
+    as returned (subnormal products round by more than eps of the channel), so the
+    returned target is non-negative at any magnitude; such a non-negative light may then
+    fail (flagged). Vectorised; one input is a batch of one.
     Costs: ``benchmarks/bench_dering.py``.
 
     Examples
@@ -335,9 +368,12 @@ def dering(
     c, vector, bands = check_coeffs(coeffs, high=MAX_DERING_BANDS)
     flat = c.reshape((-1,) + c.shape[-2:])
     rows = _rows(bands, target)
-    t, _, zero = shmin.normalised(np.swapaxes(flat, -1, -2))
+    t, e, zero = shmin.normalised(np.swapaxes(flat, -1, -2))
     t[..., 0] += zero  # a zero channel's minimum is exactly 0: it passes, as the constant 1 does
     first = _least_row(t, rows)
+    if e.min(initial=0) <= SUBNORMAL_EXPONENT:  # a channel of subnormal size (a zero channel has e = 0)
+        tiny = np.flatnonzero(np.logical_or.reduce(e <= SUBNORMAL_EXPONENT, -1))
+        first[tiny] = _least_row_rounded(flat[tiny], rows)
     failed = first == len(rows.table)
     if failed.any():
         warnings.warn(f"dering: {int(failed.sum())} of {len(flat)} functions stay negative ({target}) even at the "
@@ -357,14 +393,19 @@ def directional_light_sh(
     colour``, to add to deringed sky SH (the seed's recipe: ``dering(sky)[0] +
     directional_light_sh(sun_dir, sun_illuminance)``). ``direction``: unit vector(s) (..., 3),
     Z up; ``colour`` (C,) or (..., C): the light's integral per channel (radiance times solid
-    angle, lux at normal incidence); ``window``: at least N factors, default
-    :data:`PUNCTUAL_WINDOW` (``window_table(bands)[-1]`` keeps the light's irradiance >= 0)."""
+    angle, lux at normal incidence); ``bands``: N in [1, min(64, len(window))] (1..3 with the
+    default window); ``window``: at least N factors, default :data:`PUNCTUAL_WINDOW`
+    (``window_table(bands)[-1]`` keeps the light's irradiance >= 0)."""
     bands = check_bands(bands, high=sh.MAX_BANDS)
     d = check_dirs(direction, "direction")
     col = as_float_array(colour, "colour")
     w = as_float_array(window, "window")
-    if w.ndim != 1 or w.shape[0] < bands:
-        raise ValueError(f"window must have shape (>= {bands},), got {w.shape}")
+    if w.ndim != 1 or w.shape[0] == 0:
+        raise ValueError(f"window must have shape (M,), M >= bands = {bands} (one factor per band), got {w.shape}")
+    if w.shape[0] < bands:
+        default = " (the default PUNCTUAL_WINDOW)" if window is PUNCTUAL_WINDOW else ""
+        raise ValueError(f"bands must lie in [1, {w.shape[0]}]: window{default} has {w.shape[0]} factor"
+                         f"{'s' if w.shape[0] > 1 else ''} (one per band; give a longer window for more bands), got {bands}")
     if col.ndim == 0:
         raise ValueError(f"colour must have shape (C,) or (..., C), got {col.shape}")
     y = sh.basis(d, bands) * w[np.repeat(np.arange(bands), 2 * np.arange(bands) + 1)]

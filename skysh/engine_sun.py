@@ -43,7 +43,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from skysh import engines
-from skysh._checks import as_float_array, check_dirs
+from skysh._checks import as_float_array, check_dirs, short_repr
 
 __all__ = ["SUN_SCALES", "SUN_UNITS", "SunPreset", "sun_preset", "sun_snippet"]
 
@@ -113,7 +113,7 @@ def sun_preset(direction: ArrayLike, rgb: ArrayLike, engine: str) -> SunPreset:
         or ``rgb`` not three finite numbers.
     """
     if not isinstance(engine, str) or engine not in SUN_SCALES:
-        raise ValueError(f"engine must be one of {', '.join(map(repr, engines.ENGINES))}, got {engine!r}")
+        raise ValueError(f"engine must be one of {', '.join(map(repr, engines.ENGINES))}, got {short_repr(engine)}")
     d = check_dirs(direction, "direction")
     if d.shape != (3,):
         raise ValueError(f"direction must be one unit vector of shape (3,), got shape {d.shape}")
@@ -125,6 +125,13 @@ def sun_preset(direction: ArrayLike, rgb: ArrayLike, engine: str) -> SunPreset:
     colour = scaled / intensity if intensity > 0.0 else np.zeros(3)
     towards = engines.ENGINE_FRAMES[engine] @ d
     return SunPreset(engine, towards, -towards, colour, intensity)
+
+
+def _printed(values: NDArray[np.float64]) -> NDArray[np.float64]:
+    """A unit vector or a colour (largest |entry| 1 or 0) as :func:`sun_snippet` prints it: entries below
+    :data:`skysh.engines.SNIPPET_ZERO_BELOW` (1e-12, of that largest entry) are rounding noise (``cos(pi/2)``
+    is 6e-17) printed as 0, and -0.0 (the travel of a zenith sun) as 0, as :func:`skysh.engines.snippet` does."""
+    return np.where(np.abs(values) < engines.SNIPPET_ZERO_BELOW, 0.0, values) + 0.0
 
 
 def _js(v: float) -> str:
@@ -141,11 +148,13 @@ def sun_snippet(direction: ArrayLike, rgb: ArrayLike, engine: str) -> str:
     Paste-ready code that sets ``engine``'s directional light to the sun (:func:`sun_preset`).
 
     JavaScript for three.js and Babylon.js, C++ for Filament and Unreal, C# for Unity; numbers as
-    :func:`skysh.engines.snippet` writes them. Arguments and refusals as :func:`sun_preset`.
+    :func:`skysh.engines.snippet` writes them (a direction or colour component below
+    :data:`skysh.engines.SNIPPET_ZERO_BELOW` of 1, rounding noise, and -0.0 as 0). Arguments and
+    refusals as :func:`sun_preset`.
     """
     p = sun_preset(direction, rgb, engine)
-    r, g, b = p.colour
-    (x, y, z), (tx, ty, tz) = p.direction, p.travel
+    r, g, b = _printed(p.colour)
+    (x, y, z), (tx, ty, tz) = _printed(p.direction), _printed(p.travel)
     unit = SUN_UNITS[engine]
     if engine == "threejs":
         return (

@@ -115,7 +115,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from skysh import sh
-from skysh._checks import as_float_array, check_range
+from skysh._checks import as_float_array, check_range, short_repr
 
 __all__ = [
     "ENGINES",
@@ -125,6 +125,7 @@ __all__ = [
     "engine_map",
     "convert",
     "snippet",
+    "SNIPPET_ZERO_BELOW",
     "sun_direction",
     "BASIS_CONSTANTS",
 ]
@@ -164,6 +165,13 @@ _BABYLON_ROWS: tuple[str, ...] = ("l00", "l1_1", "l10", "l11", "l2_2", "l2_1", "
 _UNITY_ROWS: tuple[str, ...] = (
     "unity_SHAr", "unity_SHAg", "unity_SHAb", "unity_SHBr", "unity_SHBg", "unity_SHBb", "unity_SHC",
 )
+
+SNIPPET_ZERO_BELOW: float = 1e-12
+""":func:`snippet` prints a number whose magnitude is below SNIPPET_ZERO_BELOW x the DC term (the largest
+|row 0| coefficient over channels of its input) as 0, and -0.0 as 0: the rule of ``skysh coeffs --format
+table`` (:data:`skysh.cli_text.TABLE_ZERO_BELOW`, the same 1e-12). Below it lies float64 rounding noise where
+the exact value is zero (the sky's rotation by its azimuth leaves ~1e-17 of the DC in m < 0 terms at
+azimuth 0); the fit's own error is many orders of magnitude larger. :func:`convert` keeps every bit."""
 
 _FAST_LIMIT: float = 1e300
 """The fast path runs when ``sum x_j^2`` of the (9, 3) input is below this (False for NaN and inf):
@@ -227,7 +235,7 @@ _SPECS: dict[str, _Spec] = {
 # --------------------------------------------------------------------------- #
 def _check_engine(engine: object) -> str:
     if not isinstance(engine, str) or engine not in _SPECS:
-        raise ValueError(f"engine must be one of {', '.join(map(repr, ENGINES))}, got {engine!r}")
+        raise ValueError(f"engine must be one of {', '.join(map(repr, ENGINES))}, got {short_repr(engine)}")
     return engine
 
 
@@ -236,7 +244,7 @@ def _check_engine_bands(engine: str, bands: object, name: str = "bands") -> int:
     if isinstance(bands, bool) or not isinstance(bands, (int, np.integer)) or not 1 <= int(bands) <= limit:
         raise ValueError(
             f"{name} must be an integer in [1, {limit}] for engine {engine!r} (it holds at most {limit} bands, "
-            f"{limit * limit} coefficients), got {bands!r}"
+            f"{limit * limit} coefficients), got {short_repr(bands)}"
         )
     return int(bands)
 
@@ -460,6 +468,15 @@ def _convert_checked(coeffs: ArrayLike, engine: str) -> NDArray[np.float64]:
 # --------------------------------------------------------------------------- #
 # Snippets
 # --------------------------------------------------------------------------- #
+def _without_noise(values: NDArray[np.float64], coeffs: NDArray[np.float64], engine: str) -> NDArray[np.float64]:
+    """``values`` (:func:`convert` of ``coeffs``) with every |value| below :data:`SNIPPET_ZERO_BELOW` x
+    max |coeffs[0]| (the DC term) set to 0, except the map's constants (``unity_SHC.w = 1``), and -0.0
+    to 0 (adding +0.0 clears the sign of a zero only)."""
+    zero = SNIPPET_ZERO_BELOW * float(np.max(np.abs(coeffs[0])))
+    constant = _engine_map(engine, math.isqrt(coeffs.shape[0])).offset.reshape(values.shape) != 0.0
+    return np.where((np.abs(values) < zero) & ~constant, 0.0, values) + 0.0
+
+
 def _js(value: float) -> str:
     """Shortest text that reads back as the same double (JavaScript number)."""
     return repr(float(value))
@@ -573,7 +590,9 @@ def snippet(coeffs: ArrayLike, engine: str) -> str:
     JavaScript for ``threejs`` and ``babylon``, C# for ``unity`` and ``unity-shader``, C++ for
     ``filament``, ``filament-irradiance`` and ``unreal``. Numbers are the shortest text that reads
     back as the same double (JavaScript), or that text with the ``f`` suffix (C++, C#: the
-    compiler rounds it to float once). Comments name the quantity, the frame and the units.
+    compiler rounds it to float once); a number below :data:`SNIPPET_ZERO_BELOW` (1e-12) times
+    the input's DC term (max over channels of ``|coeffs[0]|``) is rounding noise and printed as
+    0, as is -0.0. Comments name the quantity, the frame and the units.
 
     Parameters
     ----------
@@ -591,7 +610,7 @@ def snippet(coeffs: ArrayLike, engine: str) -> str:
     c = as_float_array(coeffs, "coeffs")
     if c.ndim != 2:
         raise ValueError(f"coeffs must be one set of shape (N*N, 3) for a snippet, got shape {c.shape}")
-    values = convert(c, engine)  # the numbers convert() returns for this input, to the last bit
+    values = _without_noise(convert(c, engine), c, engine)  # convert()'s numbers to the last bit, noise as exact zeros
     bands = math.isqrt(c.shape[0])
     if engine == "threejs":
         return _snippet_threejs(values, bands)

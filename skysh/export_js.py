@@ -206,7 +206,7 @@ _HEADER: str = '''\
  * returns the sun as a directional light, { direction: [x, y, z] towards it, rgb: lux }, as
  * skysh.SkySH.sun_light.
  *
- * options (all optional):
+ * options (a plain object, e.g. { irradiance: true }; not an array or a class instance; all optional):
  *   bands       1 .. $max_bands (default $default_bands).
  *   irradiance  false (default): radiance; true: irradiance (clamped-cosine convolution).
  *   gibbs       the zonal sinc filter (Habel eq. 5); default !irradiance, and false with an engine
@@ -432,7 +432,11 @@ function scaleBands(o, n, factor) {
  */
 export function coefficients(sunZenith, turbidity, sunAzimuth = 0, options = {}) {
   checkFrame(sunZenith, turbidity, sunAzimuth);
-  if (options === null || typeof options !== "object") throw new TypeError(`options must be an object, got $${describe(options)}`);
+  const proto = options === null || typeof options !== "object" ? undefined : Object.getPrototypeOf(options);
+  if (proto === undefined || (proto !== null && Object.getPrototypeOf(proto) !== null)) { // a plain object only
+    const what = Array.isArray(options) ? "an array" : proto === undefined ? describe(options) : `an instance of $${proto.constructor?.name ?? "a class"}`;
+    throw new TypeError(`options must be a plain object ({ bands, irradiance, ... }), got $${what}`);
+  }
   for (const key in options) {
     if (!OPTIONS.has(key)) throw new TypeError(`unknown option $${JSON.stringify(key)}; the options are $${[...OPTIONS].join(", ")}`);
   }

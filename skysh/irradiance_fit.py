@@ -7,7 +7,9 @@ to the true sky irradiance (in L2 or in the worst case over normals) subject to
 being **non-negative on the whole sphere**, certified by a 4x4 matrix inequality
 (below). An offline module for ``tools/irradiance_study.py`` and the fit tool:
 the runtime never imports it, and cvxpy (the ``tools`` extra; solver Clarabel)
-is imported inside the functions that solve.
+is imported inside the functions that solve. :func:`solver_available` says whether
+they can run here; without the solver they raise ModuleNotFoundError naming the
+package, the extra and :data:`SOLVER_INSTALL` (:func:`solver_missing_message`).
 
 -   :func:`quadratic_parts`: (c, g, A) of f(w) = c + g.w + w^T A w from 9 SH coefficients.
 -   :func:`lifted_matrix`: the 4x4 matrix M(mu) whose PSD-ness certifies f >= 0.
@@ -20,6 +22,8 @@ is imported inside the functions that solve.
 -   :func:`fit_irradiance_table`, :func:`evaluate_irradiance_table`: the optimum as a
     Chebyshev table in the sky table's form (:mod:`skysh.fit`).
 -   :func:`build_table`: the coefficient file's irradiance table, measured and certified.
+-   :func:`solver_available`, :func:`require_solver`: whether the solver (the tools extra) is installed; one clear
+    ModuleNotFoundError if not.
 
 Coefficients are **irradiance** SH (E(l, m) = A_l L(l, m), cd/m^2 x sr, linear RGB)
 in the layout of ``docs/conventions.md`` (real, orthonormal, Condon-Shortley phase,
@@ -60,6 +64,7 @@ References
 
 from __future__ import annotations
 
+import importlib.util
 import math
 from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass
@@ -79,7 +84,59 @@ __all__ = [
     "true_irradiance", "half_sphere_normals", "constrained_coefficients", "constrained_point",
     "constrained_irradiance_grid", "fit_irradiance_table", "evaluate_irradiance_table", "FIT_ERROR_POINTS",
     "NONNEG_POINTS", "HELD_OUT_SEED", "build_table",
+    "SOLVER_PACKAGES", "SOLVER_EXTRA", "SOLVER_INSTALL", "missing_solver_packages", "solver_available",
+    "solver_missing_message", "require_solver",
 ]
+
+# --------------------------------------------------------------------------- #
+# The solver: the tools extra, imported only by the functions that solve
+# --------------------------------------------------------------------------- #
+SOLVER_PACKAGES: tuple[str, ...] = ("cvxpy", "clarabel")
+"""Import names of what the solves need: cvxpy (the problems) and Clarabel (its solver, ``solver="CLARABEL"``)."""
+
+SOLVER_EXTRA: str = "tools"
+"""The optional dependencies (``pyproject.toml``) that bring :data:`SOLVER_PACKAGES`."""
+
+SOLVER_INSTALL: str = f'pip install -e ".[{SOLVER_EXTRA}]"'
+"""The command that installs :data:`SOLVER_EXTRA` in a source checkout (where the tools that solve live)."""
+
+_SOLVES: str = "solving skysh.irradiance_fit's convex problems"
+"""What needs the solver, in the messages of the functions that solve."""
+
+
+def missing_solver_packages() -> tuple[str, ...]:
+    """The packages of :data:`SOLVER_PACKAGES` that cannot be found here (none: the solves can run).
+
+    Looks them up without importing them (``importlib.util.find_spec``: cheap, cvxpy's import is not).
+    """
+    return tuple(name for name in SOLVER_PACKAGES if importlib.util.find_spec(name) is None)
+
+
+def solver_available() -> bool:
+    """Whether the convex solves can run here (every package of :data:`SOLVER_PACKAGES` is installed)."""
+    return not missing_solver_packages()
+
+
+def solver_missing_message(task: str = _SOLVES) -> str:
+    """One line: ``task`` needs the missing solver packages, their extra and the command that installs it."""
+    missing = missing_solver_packages() or SOLVER_PACKAGES[:1]
+    verb = "is" if len(missing) == 1 else "are"
+    return f"{task} needs {' and '.join(missing)} (the {SOLVER_EXTRA} extra), which {verb} not installed: {SOLVER_INSTALL}"
+
+
+def require_solver(task: str = _SOLVES) -> None:
+    """
+    Refuse before any work when the solver is missing.
+
+    Raises
+    ------
+    ModuleNotFoundError
+        :func:`solver_missing_message` of ``task``; ``name`` is the first missing package.
+    """
+    missing = missing_solver_packages()
+    if missing:
+        raise ModuleNotFoundError(solver_missing_message(task), name=missing[0])
+
 
 Y00: float = shmin.Y00
 """Y(0, 0) = 1 / (2 sqrt(pi)); the mean of a function over the sphere is Y00 e0."""
@@ -319,6 +376,7 @@ change per solve: cvxpy's DPP reuses the compiled problem)."""
 
 def _build_problem(obj: Objective) -> Any:
     """The cvxpy problem of the three channels, each scaled so its true mean irradiance is 1."""
+    require_solver()  # one clear line naming the extra, not cvxpy's bare "No module named"
     import cvxpy as cp  # the tools extra; never imported by the runtime
 
     normals = half_sphere_normals(obj.normals)
@@ -565,11 +623,14 @@ def build_table(
 
     Raises
     ------
+    ModuleNotFoundError
+        Before any work, if the solver is missing (:func:`require_solver`).
     RuntimeError
         If the tabulated irradiance is negative at any certificate point (raise the margin).
     """
     from importlib.metadata import version
 
+    require_solver("the irradiance table")  # the block records the solver's versions: refuse before the grid
     gts, gtu = fit.chebyshev_grid(grid)
     coeffs, grid_min = constrained_irradiance_grid(gts.reshape(grid)[:, 0], gtu.reshape(grid)[0], objective, mapper,
                                                    colourspace)

@@ -135,9 +135,9 @@ def check_albedo(ground_albedo: Any) -> tuple[float, float, float] | None:
     low, high = ALBEDO_RANGE
     kind = type(ground_albedo)
     if kind is float or kind is int:  # the per-frame paths: Python numbers, no numpy
+        if not low <= ground_albedo <= high:  # also False for NaN; exact for an int of any size (no float())
+            raise ValueError(f"ground_albedo must lie in [{low:g}, {high:g}], got {number_text(ground_albedo)}")
         value = float(ground_albedo)
-        if not low <= value <= high:  # also False for NaN
-            raise ValueError(f"ground_albedo must lie in [{low:g}, {high:g}], got {number_text(value)}")
         return None if value == 0.0 else (value, value, value)
     if (kind is tuple or kind is list) and len(ground_albedo) == 3:  # three Python floats in range: no numpy
         r, g, b = ground_albedo

@@ -58,7 +58,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from skysh import sh
-from skysh._checks import as_float_array, check_choice, check_coeffs, check_count, check_flag
+from skysh._checks import as_float_array, check_choice, check_coeffs, check_count, check_flag, short_repr
 
 __all__ = [
     "BOUND_NAMES",
@@ -388,17 +388,21 @@ def decompress(
     Raises
     ------
     ValueError
-        If the shapes disagree, a word is outside [0, 2^32 - 1], a field holds the
-        unused code 2^bits - 1 (valid codes are 0 .. 2^bits - 2), or the padding
-        bits above the last field are not zero (words packed with another
-        ``bits``).
+        If ``words`` is ragged or not integers, the shapes disagree, a word is
+        outside [0, 2^32 - 1], a field holds the unused code 2^bits - 1 (valid
+        codes are 0 .. 2^bits - 2), or the padding bits above the last field are
+        not zero (words packed with another ``bits``).
     """
     sqrt, irradiance = check_flag(sqrt, "sqrt"), check_flag(irradiance, "irradiance")
     d = as_float_array(dc, "dc")
     bits = _check_bits(bits)
     scale = bounds(bound, bool(irradiance))
     _per_word, n_words = _layout(bits)
-    w = np.asarray(words)
+    try:
+        w = np.asarray(words)
+    except (TypeError, ValueError) as error:  # ragged nested lists: numpy's "inhomogeneous shape"
+        raise ValueError(f"words must be a rectangular array of integers in [0, 2^32 - 1] of shape dc.shape + "
+                         f"({n_words},), got {short_repr(words)}") from error
     if w.dtype.kind not in "ui":
         raise ValueError(f"words must be integers in [0, 2^32 - 1], got dtype {w.dtype}")
     if d.ndim < 1 or w.shape != d.shape + (n_words,):

@@ -45,7 +45,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from skysh import preetham, sh
+from skysh import files, preetham, sh
 from skysh._checks import (
     as_float_array,
     check_count,
@@ -511,6 +511,4 @@ def write_png(path: str | Path, image: ArrayLike) -> Path:
 
     header = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)  # 8-bit truecolour, no interlace
     data = b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(raw.tobytes(), 6)) + chunk(b"IEND", b"")
-    path = Path(path)
-    path.write_bytes(data)
-    return path
+    return files.write_atomic(path, data)  # never half written; a link there is replaced, not followed

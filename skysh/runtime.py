@@ -223,9 +223,11 @@ class SkySH:
 
     @classmethod
     def load(cls, path: str | Path | None = None) -> SkySH:
-        """Load the shipped coefficient file (or ``path``), checked (see :func:`skysh.coefficient_file.read`)."""
-        resolved = coefficient_file.default_path() if path is None else Path(path)
-        return cls(coefficient_file.read(resolved), resolved)
+        """Load the shipped coefficient file (or ``path``, a str or os.PathLike naming a file), checked (see
+        :func:`skysh.coefficient_file.read`, whose CoefficientFileError, a ValueError, names ``path`` when it is
+        neither, e.g. bytes or a number)."""
+        sky_table = coefficient_file.read(path)  # checks path first, as skysh._npz.as_path does
+        return cls(sky_table, coefficient_file.default_path() if path is None else Path(path))
 
     @property
     def has_irradiance_table(self) -> bool:
@@ -511,6 +513,7 @@ class SkySH:
         if not sun:
             return sky, None, e_h
         ts, t, phi = (np.broadcast_to(a, shape).ravel() for a in (ts, t, phi))
+        phi = np.fmod(phi, _TWO_PI)  # the sky's rotation reduces so (_rotation_factors): the sun sits where the sky turns
         rgb = self._sun.rgb(ts, t)  # type: ignore[union-attr]
         e_h = e_h + (np.cos(ts)[:, None] * rgb).reshape(shape + (3,))
         return sky, plan.sun_batch(ts, phi, rgb).reshape(shape + (k, 3)), e_h

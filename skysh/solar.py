@@ -102,7 +102,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from skysh import poly, sh
-from skysh._checks import as_float_array, check_bands, check_choice, check_dirs, check_range, read_only
+from skysh._checks import as_float_array, check_bands, check_choice, check_cutoff, check_dirs, check_range, read_only
 
 __all__ = [
     "SUN_ZENITH_RANGE", "TURBIDITY_RANGE", "SOLAR_WAVELENGTHS", "SOLAR_RADIANCE", "OZONE_WAVELENGTHS",
@@ -486,9 +486,7 @@ def sun_window_family(cutoff: float, attenuation: float, bands: int) -> NDArray[
         (N,) per-band factors, ``s_0 = 1``.
     """
     bands = check_bands(bands, high=sh.MAX_BANDS)
-    w = float(cutoff)
-    if not w > 0.0 or math.isnan(w):
-        raise ValueError(f"cutoff must be > 0 (a band index, or inf), got {cutoff!r}")
+    w = check_cutoff(cutoff)
     a = float(check_range(attenuation, "attenuation", 0.0, 1.0))
     x = np.arange(bands) / w
     s = np.where(x < 1.0, np.sinc(x) ** 4, 0.0)

@@ -6,8 +6,11 @@ The interactive viewer page: the sky, its SH reconstruction and the lighting, li
 -   :func:`write_static`: write them to a folder (``skysh view --out DIR``); the
     page then works from any static server and from ``file://``.
 -   :func:`make_server`, :func:`serve`: serve them on loopback only
-    (``skysh view``).
--   :data:`PAGE_FILES`, :data:`LOOPBACK_HOSTS`.
+    (``skysh view``): a silent connection is closed after :data:`IDLE_TIMEOUT_S`, at most
+    :data:`MAX_CONNECTIONS` are handled at once (one thread each; the others wait in the
+    listen backlog), and a client that goes away early is not reported.
+-   :data:`PAGE_FILES`, :data:`LOOPBACK_HOSTS`, :data:`IDLE_TIMEOUT_S`, :data:`MAX_CONNECTIONS`,
+    :data:`LISTEN_BACKLOG`, :data:`CONNECTION_THREAD`.
 
 The page (``skysh/web/``) is WebGL2 and plain JavaScript: no framework, no CDN,
 no request beyond its own files (its Content-Security-Policy forbids any other).
@@ -33,6 +36,11 @@ Everything it computes comes from skysh, generated when the files are written:
     :mod:`skysh.render`'s key.
 -   The engine snippets are :func:`skysh.engines.snippet` turned into templates
     (:func:`snippet_templates`): one source of truth for their text.
+-   The read-out (JSON or an engine's snippet; ``sky.js``'s ``readout``, no DOM) prints
+    every number below 1e-12 of the DC term (the largest |coefficient of row 0| over the
+    channels, of the radiance an engine converts) as 0, and -0 as 0: rounding noise of the
+    rotation to the sun's azimuth (``sky.js``'s ``NOISE_FLOOR``; the rule of
+    :func:`skysh.engines.snippet`).
 
 The page's error number is the relative RMS difference of the reconstructed
 radiance from the true sky over the upper hemisphere (all three channels),
@@ -59,6 +67,8 @@ import json
 import math
 import re
 import socket
+import sys
+import threading
 from functools import partial
 from pathlib import Path
 from string import Template
@@ -67,12 +77,15 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from skysh import files
+
 if TYPE_CHECKING:  # pragma: no cover
     from skysh.runtime import SkySH
 
 __all__ = [
-    "ERROR_RULE_MU", "ERROR_RULE_PHI", "LOOPBACK_HOSTS", "PAGE_FILES", "content_security_policy", "fill_snippet",
-    "make_server", "page_config", "page_files", "serve", "snippet_templates", "write_static", "zenith_luminance_form",
+    "CONNECTION_THREAD", "ERROR_RULE_MU", "ERROR_RULE_PHI", "IDLE_TIMEOUT_S", "LISTEN_BACKLOG", "LOOPBACK_HOSTS",
+    "MAX_CONNECTIONS", "PAGE_FILES", "content_security_policy", "fill_snippet", "make_server", "page_config",
+    "page_files", "serve", "snippet_templates", "write_static", "zenith_luminance_form",
 ]
 
 WEB_DIR: Path = Path(__file__).with_name("web")
@@ -90,6 +103,28 @@ _CONTENT_TYPES: dict[str, str] = {
 
 LOOPBACK_HOSTS: tuple[str, ...] = ("127.0.0.1", "::1", "localhost")
 """Host names :func:`serve` accepts (any other address in 127.0.0.0/8 too); anything else is refused."""
+
+IDLE_TIMEOUT_S: float = 5.0
+"""Default seconds, > 0, that the server waits on a connection that sends nothing (no request, or half of one)
+or reads nothing of its answer before it closes it; a browser's request arrives within milliseconds."""
+
+MAX_CONNECTIONS: int = 16
+"""Default number of connections handled at once, one thread each (a browser opens about six per server); the
+next ones wait, connected, in the listen backlog until a handler is free."""
+
+LISTEN_BACKLOG: int = 64
+"""Connections the kernel holds while all handlers are busy; beyond it a client's connection attempt is dropped
+(its TCP stack retries)."""
+
+CONNECTION_THREAD: str = "skysh-viewer-connection"
+"""Name of the server's handler threads (each handles one connection, then ends), followed by ``:PORT``."""
+
+_SLOT_POLL_S: float = 0.25
+"""Seconds between the accept loop's checks for ``shutdown()`` while every handler is busy."""
+
+_EARLY_DISCONNECT: tuple[type[BaseException], ...] = (ConnectionError, TimeoutError)
+"""A client that went away or stalled (BrokenPipeError, ConnectionResetError, ConnectionAbortedError, a socket
+timeout): not the server's fault, so not reported."""
 
 ERROR_RULE_MU: int = 24
 """Gauss-Legendre nodes in cos(theta) per hemisphere of the page's error rule."""
@@ -396,31 +431,29 @@ def write_static(out_dir: str | Path, sky: SkySH | None = None) -> list[Path]:
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise ValueError(f"out_dir must be a folder, got the file {str(out)!r}")
-    files = page_files(sky)
-    out.mkdir(parents=True, exist_ok=True)
-    written = []
-    for name, content in files.items():
-        path = out / name
-        if path.is_symlink():  # replace a link, never write through it
-            path.unlink()
-        path.write_bytes(content)
-        written.append(path)
-    return written
+    # all renamed into place only once every file is complete; a link there is replaced, never written through
+    return files.write_together({out / name: content for name, content in page_files(sky).items()}, parents=True)
 
 
 # --------------------------------------------------------------------------- #
 # The server
 # --------------------------------------------------------------------------- #
 class _Handler(http.server.BaseHTTPRequestHandler):
-    """GET / HEAD of the page's files from memory; 404 for any other path."""
+    """GET / HEAD of the page's files from memory; 404 for any other path. One request per connection (HTTP/1.0);
+    a connection silent for ``timeout`` seconds is closed (http.server drops it quietly)."""
 
     server_version = "skysh-viewer"
     sys_version = ""
 
-    def __init__(self, *args: Any, files: dict[str, tuple[bytes, str]], csp: str, **kwargs: Any) -> None:
+    def __init__(self, *args: Any, files: dict[str, tuple[bytes, str]], csp: str, timeout: float, **kwargs: Any) -> None:
         self.files = files
         self.csp = csp
+        self.idle_timeout = timeout
         super().__init__(*args, **kwargs)
+
+    def setup(self) -> None:
+        super().setup()
+        self.connection.settimeout(self.idle_timeout)  # every read and write; http.server drops a timed-out connection
 
     def _host_allowed(self) -> bool:
         """Refuse a Host header naming anything but loopback (DNS-rebinding guard)."""
@@ -470,7 +503,44 @@ class _Handler(http.server.BaseHTTPRequestHandler):
 
 
 class _Server(http.server.ThreadingHTTPServer):
+    """A thread per connection, at most ``max_connections`` at once; a client's early disconnect is not reported."""
+
     daemon_threads = True  # Ctrl-C does not wait for open connections
+    request_queue_size = LISTEN_BACKLOG
+
+    def __init__(self, address: tuple[str, int], handler: Any, max_connections: int) -> None:
+        self._slots = threading.BoundedSemaphore(max_connections)
+        self._stopping = threading.Event()
+        super().__init__(address, handler)
+
+    def process_request(self, request: Any, client_address: Any) -> None:
+        """Start the connection's thread once a slot is free; meanwhile the accept loop waits (new connections wait
+        in the backlog) and gives the connection up when ``shutdown()`` is called."""
+        while not self._slots.acquire(timeout=_SLOT_POLL_S):
+            if self._stopping.is_set():
+                self.shutdown_request(request)
+                return
+        try:
+            name = f"{CONNECTION_THREAD}:{self.server_address[1]}"
+            threading.Thread(target=self._handle, args=(request, client_address), name=name, daemon=True).start()
+        except BaseException:
+            self._slots.release()
+            raise
+
+    def _handle(self, request: Any, client_address: Any) -> None:
+        try:
+            self.process_request_thread(request, client_address)  # handles, reports errors, closes the socket
+        finally:
+            self._slots.release()
+
+    def handle_error(self, request: Any, client_address: Any) -> None:
+        """socketserver's traceback on stderr, except for a client that went away (:data:`_EARLY_DISCONNECT`)."""
+        if not isinstance(sys.exc_info()[1], _EARLY_DISCONNECT):
+            super().handle_error(request, client_address)
+
+    def shutdown(self) -> None:
+        self._stopping.set()
+        super().shutdown()
 
 
 class _Server6(_Server):
@@ -490,7 +560,20 @@ def _loopback(host: str) -> str:
     return str(address)
 
 
-def make_server(host: str = "127.0.0.1", port: int = 0, sky: SkySH | None = None) -> http.server.ThreadingHTTPServer:
+def _check_limits(port: int, timeout: float, max_connections: int) -> None:
+    """ValueError naming the parameter of :func:`make_server` that is out of its range."""
+    if isinstance(port, bool) or not isinstance(port, int) or not 0 <= port <= 65535:
+        raise ValueError(f"port must be an integer in [0, 65535], got {port!r}")
+    if isinstance(timeout, bool) or not isinstance(timeout, (int, float)) or not 0.0 < timeout < math.inf:
+        raise ValueError(f"timeout must be a finite number of seconds > 0, got {timeout!r}")
+    if isinstance(max_connections, bool) or not isinstance(max_connections, int) or max_connections < 1:
+        raise ValueError(f"max_connections must be an integer >= 1, got {max_connections!r}")
+
+
+def make_server(
+    host: str = "127.0.0.1", port: int = 0, sky: SkySH | None = None, timeout: float = IDLE_TIMEOUT_S,
+    max_connections: int = MAX_CONNECTIONS,
+) -> http.server.ThreadingHTTPServer:
     """
     A bound (not yet running) HTTP server of the page on loopback.
 
@@ -502,22 +585,28 @@ def make_server(host: str = "127.0.0.1", port: int = 0, sky: SkySH | None = None
         TCP port in [0, 65535]; 0 picks a free one (read ``server.server_address``).
     sky
         A loaded :class:`skysh.SkySH`; default the shipped coefficient file.
+    timeout
+        Seconds, finite and > 0 (default :data:`IDLE_TIMEOUT_S`): a connection that sends nothing, stops part
+        way through its request or takes nothing of the answer for this long is closed.
+    max_connections
+        Connections handled at once, an integer >= 1 (default :data:`MAX_CONNECTIONS`): one thread each
+        (named :data:`CONNECTION_THREAD` ``:PORT``); the next ones wait in the listen backlog (:data:`LISTEN_BACKLOG`).
 
     Returns
     -------
     ThreadingHTTPServer
         Run it with ``serve_forever()``; stop with ``shutdown()`` and ``server_close()``.
         It answers GET and HEAD of the page's files (``/`` is ``index.html``) and 404
-        for every other path.
+        for every other path. A client that disconnects early (broken pipe, reset,
+        timeout) is not reported; any other error prints socketserver's traceback.
     """
     address = _loopback(host)
-    if isinstance(port, bool) or not isinstance(port, int) or not 0 <= port <= 65535:
-        raise ValueError(f"port must be an integer in [0, 65535], got {port!r}")
+    _check_limits(port, timeout, max_connections)
     files = page_files(sky)
     table = {name: (content, _CONTENT_TYPES[Path(name).suffix]) for name, content in files.items()}
-    handler = partial(_Handler, files=table, csp=content_security_policy(files["index.html"]))
+    handler = partial(_Handler, files=table, csp=content_security_policy(files["index.html"]), timeout=float(timeout))
     server_class = _Server6 if ":" in address else _Server
-    return server_class((address, port), handler)
+    return server_class((address, port), handler, max_connections)
 
 
 def _url(server: http.server.ThreadingHTTPServer) -> str:
@@ -543,7 +632,8 @@ def serve(host: str = "127.0.0.1", port: int = 0, open_browser: bool = False, sk
     Notes
     -----
     Prints ``skysh viewer: http://127.0.0.1:PORT/ (Ctrl-C to stop)`` once it
-    listens and ``skysh viewer: stopped`` after Ctrl-C, then returns.
+    listens and ``skysh viewer: stopped`` after Ctrl-C, then returns. The server is
+    :func:`make_server`'s with its defaults (:data:`IDLE_TIMEOUT_S`, :data:`MAX_CONNECTIONS`).
     """
     if not isinstance(open_browser, bool):
         raise TypeError(f"open_browser must be True or False, got {open_browser!r}")

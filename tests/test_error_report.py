@@ -12,6 +12,10 @@ takes the fewest sections that still pass through every shared module (section 9
 the process pool, the memoised grids and sweep, the studies; section 10: the
 renders); the run of every section is marked ``slow``.
 
+Without cvxpy (the tools extra) the report skips section 11, says so in report.md and completes: a quick run of
+sections 6 and 11 in an interpreter where cvxpy cannot be imported, whether or not it is installed. The tests that
+solve are skipped without it (``conftest.needs_cvxpy``).
+
 Sections 11 and 12 also run in process at the quick sizes: their tables and charts, the tabulated
 irradiance within issue 18's bound and never negative (gibbs=True and a scaled projection must exceed it), the
 lune quadrature against closed forms and against the 64-band projection (a wrong sun azimuth must miss), the
@@ -41,7 +45,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import ROOT, fibonacci_sphere
+from conftest import ROOT, fibonacci_sphere, needs_cvxpy, script_without_cvxpy
 
 pytestmark = [pytest.mark.xdist_group("error_report")] if importlib.util.find_spec("xdist") else []
 """``pytest -n N --dist loadgroup``: one worker runs this module (its module fixtures once; the quick run is shared)."""
@@ -79,6 +83,15 @@ PNG_CHANNELS: dict[int, int] = {0: 1, 2: 3, 3: 1, 4: 2, 6: 4}
 
 RUNS: dict[str, tuple[int, ...] | None] = {"wiring": WIRING_SECTIONS, "all": None}
 """The quick runs: the default one and every section (None: no --sections)."""
+
+SKIPPED: str = "**Skipped in this run**"
+"""How report.md opens a section skipped for a missing package of the tools extra."""
+
+SOLVER_SECTION: int = 11
+"""The section that solves convex problems (cvxpy): skipped without the tools extra."""
+
+CHEAP_SECTION: int = 6
+"""A section that needs no optional package and takes about a second at the quick sizes (the quantization table)."""
 
 
 def load_tool() -> types.ModuleType:
@@ -272,7 +285,12 @@ class TestQuickRun:
 
     def test_every_section_has_a_chart(self, quick: dict, report: types.SimpleNamespace) -> None:
         text = quick["text"]
+        skipped = {k for k in report.run.SECTIONS if report.run.missing_packages(k)}  # those without the tools extra
         for number, start, end in section_spans(text, report.run.SECTION_TITLES):
+            if number in skipped:
+                assert SKIPPED in text[start:end], f"section {number} lacks a package but was not skipped"
+                continue
+            assert SKIPPED not in text[start:end], f"section {number} skipped"
             assert re.search(r"!\[[^\]]+\]\([^)]+\.png\)", text[start:end]), f"section {number} has no chart"
 
     def test_referenced_charts_exist_and_all_are_referenced(self, quick: dict) -> None:
@@ -370,6 +388,52 @@ class TestWiring:
             for name in report.studies.__all__:
                 assert not re.search(rf"\b(hazel|quantize|quantize_experiment|hazel_study|quantize_study|sky)\.{name}\b", text), \
                     f"{path.name} uses {name} directly instead of through report.studies"
+
+
+# --------------------------------------------------------------------------- #
+class TestWithoutCvxpy:
+    def test_the_report_skips_the_solver_section_and_completes(self, report: types.SimpleNamespace,
+                                                               tmp_path: Path) -> None:
+        sections = (CHEAP_SECTION, SOLVER_SECTION)
+        command = script_without_cvxpy(TOOL, "--out", str(tmp_path), "--quick", "--no-progress", "--sections",
+                                       ",".join(map(str, sections)))
+        proc = subprocess.run(command, cwd=ROOT, env=quick_env(), capture_output=True, text=True, timeout=TIMEOUT_S,
+                              check=False)
+        assert proc.returncode == 0 and "Traceback" not in proc.stderr, proc.stderr[-4000:]
+        text = (tmp_path / "report.md").read_text(encoding="utf-8")
+        spans = {k: text[start:end] for k, start, end in section_spans(text, report.run.SECTION_TITLES)}
+        assert list(spans) == list(sections)
+        skipped = spans[SOLVER_SECTION]
+        assert skipped.strip().split("\n\n", 1)[1].startswith(SKIPPED)  # right under its heading
+        assert "cvxpy" in skipped and "the `tools` extra" in skipped and '`pip install -e ".[tools]"`' in skipped
+        assert not re.search(r"!\[[^\]]+\]\([^)]+\.png\)", skipped) and SKIPPED not in spans[CHEAP_SECTION]
+        assert re.search(r"!\[[^\]]+\]\([^)]+\.png\)", spans[CHEAP_SECTION])  # the rest of the report ran
+        title = report.run.SECTION_TITLES[SOLVER_SECTION]
+        summary = text[text.index("## Summary") : text.index(f"\n## {CHEAP_SECTION}. ")]
+        assert re.search(rf"^\| Section {SOLVER_SECTION}\. {re.escape(title)} \| skipped: needs cvxpy", summary, re.MULTILINE)
+        assert f"[{SOLVER_SECTION}. {title}](#" in summary and "(skipped: needs cvxpy" in summary
+        assert f"section {SOLVER_SECTION} ({title}) skipped: needs cvxpy" in proc.stderr
+        assert 'pip install -e ".[tools]"' in proc.stderr and "skipped sections 11" in proc.stdout
+
+    def test_a_skipped_section_computes_nothing(self, tool: types.ModuleType, report: types.SimpleNamespace,
+                                                tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+        s11 = report.s11_irradiance_table
+
+        def computed(ctx: object) -> dict:
+            raise AssertionError("a section without its packages was computed")
+
+        monkeypatch.setattr(s11, "missing_packages", lambda: ("cvxpy",))
+        monkeypatch.setattr(s11, "compute", computed)
+        assert tool.main(["--out", str(tmp_path), "--quick", "--sections", str(SOLVER_SECTION), "--no-progress"]) == 0
+        assert SKIPPED in (tmp_path / "report.md").read_text(encoding="utf-8")
+
+    def test_the_solver_section_asks_the_solver_helper(self, report: types.SimpleNamespace) -> None:
+        from skysh import irradiance_fit
+
+        assert report.s11_irradiance_table.missing_packages is irradiance_fit.missing_solver_packages
+        assert report.run.missing_packages(SOLVER_SECTION) == irradiance_fit.missing_solver_packages()
+        assert [k for k in report.run.SECTIONS if hasattr(report.run.SECTIONS[k], report.run.MISSING_PACKAGES)] \
+            == [SOLVER_SECTION]  # the only section that imports cvxpy (through skysh.irradiance_fit)
 
 
 # --------------------------------------------------------------------------- #
@@ -569,6 +633,7 @@ def section_checks(ctx: object, section: object, png: str, header: str) -> str:
 
 
 class TestIrradianceTableSection:
+    @needs_cvxpy
     def test_table_chart_and_rows(self, section_11: tuple[dict, object], quick_ctx: object,
                                   report: types.SimpleNamespace) -> None:
         data, section = section_11
@@ -580,6 +645,7 @@ class TestIrradianceTableSection:
         assert sum(name.startswith("tabulated: ") for name in data["results"]) == 1
         assert len(data["results"]) == 9  # plain, 2 runtime, continuous, 4 optima, tabulated
 
+    @needs_cvxpy
     def test_the_tabulated_row_meets_the_bound_and_stays_non_negative(self, section_11: tuple[dict, object],
                                                                        report: types.SimpleNamespace) -> None:
         data, _ = section_11
@@ -587,6 +653,7 @@ class TestIrradianceTableSection:
         assert data["results"][tab["name"]]["error"].max() <= report.s11_irradiance_table.THRESHOLD
         assert tab["negative"] == 0 and tab["minimum"] >= 0.0
 
+    @needs_cvxpy
     def test_negative_control_gibbs_exceeds_the_bound(self, section_11: tuple[dict, object],
                                                       report: types.SimpleNamespace) -> None:
         data, _ = section_11
@@ -606,6 +673,7 @@ class TestIrradianceTableSection:
         lowest = ev.measure(plain)["lowest"]
         assert np.all(lowest <= sampled) and np.all(sampled - lowest <= LOWEST_SAMPLED_GAP)
 
+    @needs_cvxpy
     def test_without_the_runtime_table_a_grid_is_solved_and_fitted(self, report: types.SimpleNamespace, quick_ctx: object,
                                                                    solved_once: None, tmp_path: Path,
                                                                    monkeypatch: pytest.MonkeyPatch) -> None:

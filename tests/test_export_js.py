@@ -537,6 +537,30 @@ class TestRefusals:
             with pytest.raises(ValueError):
                 sky.coefficients(*call, bands=3)
 
+    def test_options_must_be_a_plain_object(self, module_dir: Path) -> None:
+        """Issue 23: an array (once taken as no options), a Map, a Date or a class instance as ``options`` is a
+        TypeError naming options; plain objects pass, from this realm, another (node:vm) or without a prototype."""
+        script = (
+            "import vm from 'node:vm';\n"
+            f"import {{ coefficients }} from {json.dumps((module_dir / 'sky_sh.mjs').as_uri())};\n"
+            "class Options { constructor() { this.bands = 2; } }\n"
+            "const bad = [[], [2], new Map([['bands', 2]]), new Date(0), new Options(), new Float64Array(2)];\n"
+            "const refused = bad.map((options) => {\n"
+            "  try { coefficients(0.5, 3, 1, options); return 'accepted'; }\n"
+            "  catch (e) { return e.constructor.name + ' ' + e.message; }\n"
+            "});\n"
+            "const bare = Object.create(null); bare.bands = 2;\n"
+            "const good = [{ bands: 2 }, bare, vm.runInNewContext('({ bands: 2 })'), undefined];\n"
+            "const accepted = good.map((options) => coefficients(0.5, 3, 1, options).length);\n"
+            "console.log(JSON.stringify({ refused, accepted }));\n"
+        )
+        done = subprocess.run([NODE, "--input-type=module", "-e", script], capture_output=True, text=True, check=True)
+        reply = json.loads(done.stdout)
+        for message in reply["refused"]:
+            assert message.startswith("TypeError options must be a plain object"), reply
+        assert reply["refused"][0].endswith("got an array") and "Options" in reply["refused"][4]
+        assert reply["accepted"] == [12, 12, 12, 27]  # bands 2 (4 x 3 numbers); no options: the default 3 bands
+
     def test_unknown_engine_lists_the_valid_ones(self, module_dir: Path, node: NodeServer) -> None:
         reply = node.run(module_dir, [[0.5, 3.0, 0.0, {"engine": "godot"}]])
         for name in reply["engines"]:

@@ -296,6 +296,17 @@ class TestC:
         assert worst < DOUBLE_TOLERANCE
         assert direction_error < SUN_DIRECTION_TOLERANCE and rgb_error < DOUBLE_TOLERANCE
 
+    @pytest.mark.parametrize("name", ["3", "7"])
+    def test_large_azimuths_with_the_sun_match_the_runtime(self, sky: SkySH, binaries: dict[str, Path], name: str) -> None:
+        """Issue 23: the sun sits where the sky turns at any finite azimuth (both reduce it by fmod(phi, 2 pi))."""
+        bands = BUILDS[name][0]
+        rng = np.random.default_rng(23)
+        pts = [(p[0], p[1], float(10.0 ** rng.uniform(4, 300) * rng.choice([-1.0, 1.0])), *p[3:6], 1, *p[7:])
+               for p in random_points(bands, 60)]
+        worst, direction_error, rgb_error = errors(sky, binaries[name], bands, pts)
+        assert worst < DOUBLE_TOLERANCE
+        assert direction_error < SUN_DIRECTION_TOLERANCE and rgb_error < DOUBLE_TOLERANCE
+
     def test_float_build(self, sky: SkySH, binaries: dict[str, Path]) -> None:
         pts = [p for p in random_points(3, 120) if abs(p[2]) < 10.0]  # a float32 azimuth of 20 rad is off by 1e-6
         worst, _, rgb_error = errors(sky, binaries["3f"], 3, pts)

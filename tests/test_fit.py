@@ -16,7 +16,8 @@ recovery of ln XYZ that is a Chebyshev polynomial in variables typed here from
 their definitions, and its fit against :mod:`skysh.solar` on held-out points. ``tools/fit_sky.py`` (what ``skysh fit`` runs) is
 checked for its output rules with ``fit.build`` replaced by the polynomial sky:
 ``--out`` required, the shipped file replaced only with ``--force``, every
-refusal one line with exit status 2.
+refusal one line with exit status 2, without cvxpy (the tools extra) too, before
+any projection (in process and in a fresh interpreter that cannot import it).
 
 One class per public function; every tolerance is a named constant with the
 reason for its size.
@@ -25,11 +26,12 @@ reason for its size.
 from __future__ import annotations
 
 import math
+import subprocess
 from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import EPS, ROOT, chebyshev_variables, load_script
+from conftest import EPS, ROOT, chebyshev_variables, load_script, script_without_cvxpy
 from numpy.polynomial import chebyshev as npcheb
 
 from skysh import coefficient_file, fit, irradiance_fit, poly, preetham, sh, solar
@@ -474,7 +476,12 @@ def fake_build(monkeypatch: pytest.MonkeyPatch, psky: PolynomialSky) -> list:
     irradiance = (shipped.tables["irradiance"].table, shipped.tables["irradiance"].degrees,
                   shipped.metadata["tables"]["irradiance"])
     monkeypatch.setattr(irradiance_fit, "build_table", lambda *args, **kwargs: irradiance)
+    monkeypatch.setattr(irradiance_fit, "missing_solver_packages", lambda: ())  # build_table needs no solver now
     return calls
+
+
+FRESH_TIMEOUT_S: float = 120.0
+"""Hang guard of fit_sky.py's refusal in a fresh interpreter (imports only: about a second)."""
 
 
 def _tool_refuses(fit_sky, argv: list[str], capsys: pytest.CaptureFixture, match: str) -> None:
@@ -537,13 +544,36 @@ class TestFitToolOutput:
             (["--out", "/tmp/x.npz", "--jobs", "0"], "--jobs must be an integer in [1, 256]"),
             (["--out", "/tmp/x.npz", "--colourspace", "Bogus"], "--colourspace must be one of: sRGB, ITU-R BT.709"),
             (["--out", "/tmp"], "--out /tmp is a directory"),
+            (["--out", str(ROOT / "skysh" / "runtime.py"), "--force"], "lies inside skysh's own files"),
+            (["--out", str(ROOT / "data" / "other.npz"), "--force"], "lies inside skysh's own files"),
         ],
         ids=["unknown-flag", "bands", "degrees-form", "degrees-bound", "sun-degrees-bound", "grid", "samples", "tolerance",
-             "jobs", "colourspace", "directory"],
+             "jobs", "colourspace", "directory", "package-module", "package-data"],
     )
     def test_one_line_refusals(self, fit_sky, capsys: pytest.CaptureFixture, fake_build: list, argv: list, match: str) -> None:
         _tool_refuses(fit_sky, argv, capsys, match)
         assert fake_build == []
+
+    @pytest.mark.parametrize("extra", [[], ["--compare-scalings"]], ids=["fit", "compare-scalings"])
+    def test_refuses_without_cvxpy_before_any_work(self, fit_sky, tmp_path: Path, capsys: pytest.CaptureFixture,
+                                                   monkeypatch: pytest.MonkeyPatch, fake_build: list,
+                                                   extra: list) -> None:
+        # Every file needs the irradiance table (a required table of the format); --compare-scalings writes one too.
+        monkeypatch.setattr(irradiance_fit, "missing_solver_packages", lambda: ("cvxpy",))
+        out = tmp_path / "sky.npz"
+        _tool_refuses(fit_sky, ["--quick", "--out", str(out), *extra], capsys,
+                      f"error: {fit_sky.IRRADIANCE_TASK} needs cvxpy (the tools extra), which is not installed: "
+                      'pip install -e ".[tools]"')
+        assert fake_build == [] and not out.exists()
+        assert "irradiance" in {spec.name for spec in coefficient_file.TABLES if spec.required}
+
+    def test_refuses_without_cvxpy_in_a_fresh_interpreter(self, tmp_path: Path) -> None:
+        out = tmp_path / "sky.npz"
+        proc = subprocess.run(script_without_cvxpy(ROOT / "tools" / "fit_sky.py", "--quick", "--out", str(out)),
+                              cwd=ROOT, capture_output=True, text=True, timeout=FRESH_TIMEOUT_S, check=False)
+        assert proc.returncode == 2 and proc.stdout == "", proc.stderr
+        assert proc.stderr.startswith("fit_sky.py: error: ") and proc.stderr.count("\n") == 1, proc.stderr
+        assert "needs cvxpy" in proc.stderr and 'pip install -e ".[tools]"' in proc.stderr and not out.exists()
 
     def test_through_the_cli(self, capsys: pytest.CaptureFixture) -> None:
         from skysh import cli

@@ -96,8 +96,10 @@ class Kind:
 
 _NOT_NUMBERS: tuple[tuple[str, Any], ...] = (
     ("bool", True), ("numpy-bool", np.True_), ("text", "1.0"), ("none", None), ("complex", 1 + 1j),
-    ("object", object()), ("huge-int", 10**400), ("bytes", b"1"),
+    ("object", object()), ("huge-int", 10**400), ("huger-int", 10**5000), ("bytes", b"1"),
 )
+"""Values that are not one real float64. ``huger-int`` has more than the 4300 digits Python turns into text, so a
+message that formats it (``f"{value}"``, ``repr``) raises its own ValueError instead of naming the parameter."""
 
 
 @dataclass(frozen=True)
@@ -306,6 +308,19 @@ RGB_TRIPLE = Values((("nan", np.array([[math.nan, 0.0, 0.0]])), ("two-channels",
                      ("broadcast-too-large", np.broadcast_to(np.ones(3), (BIG // 3 + 1, 3)))))
 
 
+ALBEDO_TRIPLE = Values((("huge-int", (10**400, 0.1, 0.1)), ("huger-int", [10**5000, 0, 0]), ("above", (0.2, 1.5, 0.1)),
+                        ("negative", [-0.1, 0.2, 0.2]), ("two", (0.2, 0.2)), ("nan", (0.2, math.nan, 0.2)),
+                        ("bool", (True, 0.2, 0.2)), ("text", ("0.2", "0.2", "0.2"))))
+"""Bad RGB albedo triples (lists and tuples: the runtime screens three floats without numpy)."""
+
+
+class BytesPathLike:
+    """An os.PathLike whose ``__fspath__`` returns bytes: a file named by bytes, which skysh does not take."""
+
+    def __fspath__(self) -> bytes:
+        return b"data/preetham_sh.npz"
+
+
 def _sky_row(name: str, method: str, valid: dict[str, Any], kinds: dict[str, Kind]) -> Row:
     return Row(name, lambda: getattr(the_sky(), method), valid, kinds)
 
@@ -425,7 +440,15 @@ ROWS: list[Row] = [
     Row("runtime.gibbs_factors", lambda: gibbs_factors, dict(bands=3), dict(bands=Count(1, 64))),
     _sky_row("SkySH.coefficients", "coefficients", dict(sun_azimuth=0.3, **dict(SUN)),
              dict(**RUNTIME_KINDS, bands=Count(1, 7), gibbs=Flag(none_ok=True), dering=Flag(none_ok=True),
-                  irradiance=Flag(), colourspace=Choice(("sRGB",), none_ok=True))),
+                  irradiance=Flag(), colourspace=Choice(("sRGB",), none_ok=True), ground_albedo=Number(0.0, 1.0))),
+    _sky_row("SkySH.coefficients(sun)", "coefficients", dict(sun_azimuth=0.3, sun=True, ground_albedo=0.2, **dict(SUN)),
+             dict(ground_albedo=Number(0.0, 1.0))),
+    _sky_row("SkySH.coefficients(batch)", "coefficients", dict(sun_zenith=np.array([0.5, 0.6]), turbidity=3.0,
+                                                               ground_albedo=(0.2, 0.3, 0.1)),
+             dict(ground_albedo=ALBEDO_TRIPLE)),
+    Row("SkySH.load", lambda: SkySH.load, {}, dict(path=PathKind())),
+    Row("SkySH.load(not text)", lambda: SkySH.load, {}, dict(path=Values((("bytes", b"x"), ("zero", 0),
+                                                                              ("bytes-path-like", BytesPathLike()))))),
     _sky_row("SkySH.radiance", "radiance", dict(dirs=Z, sun_azimuth=0.3, **SUN),
              dict(dirs=Dirs(), **SCALAR_RUNTIME_KINDS, bands=Count(1, 7), gibbs=Flag(none_ok=True))),
     _sky_row("SkySH.irradiance_at", "irradiance_at", dict(normals=Z, sun_azimuth=0.3, **SUN),
@@ -448,13 +471,19 @@ OTHER_ROWS: list[Row] = [
     # skysh.dering
     Row("dering.sinc4_window", _other("dering", "sinc4_window"), dict(cutoff=5.6, bands=3),
         dict(cutoff=Values((("bool", True), ("nan", math.nan), ("zero", 0.0), ("negative", -1.0), ("text", "5"),
-                            ("none", None), ("array", np.array([5.6, 5.6])))), bands=Count(1))),
+                            ("none", None), ("array", np.array([5.6, 5.6])), ("huge-int", 10**400),
+                            ("huge-negative-int", -10**400), ("huger-int", 10**5000))), bands=Count(1))),
+    Row("solar.sun_window_family", _other("solar", "sun_window_family"), dict(cutoff=5.6, attenuation=0.5, bands=3),
+        dict(cutoff=Values((("bool", True), ("nan", math.nan), ("zero", 0.0), ("negative", -1.0), ("text", "5"),
+                            ("none", None), ("huge-int", 10**400), ("huger-int", 10**5000))),
+             attenuation=Values((("nan", math.nan), ("above", 1.5), ("text", "0.5"))), bands=Count(1))),
     Row("dering.delta_minimum", _other("dering", "delta_minimum"), dict(scales=[1.0, 0.9, 0.7], target="irradiance"),
         dict(scales=Values((("nan", [1.0, math.nan]), ("text", "abc"), ("none", None), ("empty", []),
                             ("matrix", np.ones((3, 3))), ("bool", [True, True]))),
              target=Choice(("irradiance", "radiance")))),
     Row("dering.linear_attenuation", _other("dering", "linear_attenuation"), dict(cutoff=5.6, bands=3),
-        dict(cutoff=Values((("nan", math.nan), ("zero", 0.0), ("text", "5"), ("none", None))), bands=Count(1, 7),
+        dict(cutoff=Values((("nan", math.nan), ("zero", 0.0), ("text", "5"), ("none", None), ("huge-int", 10**400))),
+             bands=Count(1, 7),
              target=Choice(("irradiance", "radiance")))),
     Row("dering.window_table", _other("dering", "window_table"), dict(bands=3),
         dict(bands=Count(1, 7), target=Choice(("irradiance", "radiance")))),
@@ -469,8 +498,12 @@ OTHER_ROWS: list[Row] = [
              return_failed=Flag())),
     Row("dering.directional_light_sh", _other("dering", "directional_light_sh"),
         dict(direction=[0.0, 0.0, 1.0], colour=[1.0, 1.0, 1.0], bands=3),
-        dict(direction=Dirs(), colour=Number(), bands=Count(1, 64),
-             window=Values((("short", [1.0]), ("nan", [1.0, math.nan, 1.0]), ("text", "w"))))),
+        dict(direction=Dirs(), colour=Number(), bands=Count(1, 3),  # the default window: 3 factors
+             window=Values((("short", [1.0]), ("nan", [1.0, math.nan, 1.0]), ("text", "w"), ("empty", []),
+                            ("matrix", np.ones((3, 3))))))),
+    Row("dering.directional_light_sh(window of 64)", _other("dering", "directional_light_sh"),
+        dict(direction=[0.0, 0.0, 1.0], colour=[1.0, 1.0, 1.0], bands=3, window=np.ones(64)),
+        dict(bands=Count(1, 64))),
     # skysh.engines
     Row("engines.engine_map", _other("engines", "engine_map"), dict(engine="threejs", bands=3),
         dict(engine=Choice(("threejs", "filament", "unity")), bands=Count(1, 64))),
@@ -491,7 +524,8 @@ OTHER_ROWS: list[Row] = [
     Row("quantize.decompress", _other("quantize", "decompress"), {},
         dict(dc=Number(), bits=Count(2, 32), bound=Choice(("tight", "prior")), sqrt=Flag(), irradiance=Flag(),
              words=Values((("negative", -np.ones((3, 2))), ("too-large", np.full((3, 2), 2**33)), ("text", "w"),
-                           ("nan", np.full((3, 2), math.nan)), ("shape", np.zeros((3, 5), np.uint32))))),
+                           ("nan", np.full((3, 2), math.nan)), ("shape", np.zeros((3, 5), np.uint32)),
+                           ("ragged", [[1, 2], [3], [4, 5]]), ("huge-int", [[10**400, 0]] * 3)))),
         valid_factory=lambda: dict(zip(("dc", "words"), _module("quantize").compress(C9)))),
     Row("quantize.table3_errors", _other("quantize", "table3_errors"), dict(coeffs=C9[None], bits=8, n_theta=4),
         dict(bits=Count(2, 32), n_theta=Count(3))),

@@ -11,18 +11,20 @@ the convex optima are compared with scipy solving the same problems with the
 non-negativity sampled on a dense set of normals (a relaxation: its optimum is
 at most the exact one, and close to it); chromaticities come from colour-science.
 Every tolerance is a named constant with its reason. cvxpy is the tools extra:
-the solver tests are skipped without it.
+the solver tests are skipped without it (``conftest.needs_cvxpy``); without it the
+functions that solve refuse at once with one message naming the extra
+(:class:`TestWithoutTheSolver`, whether or not cvxpy is installed).
 """
 
 from __future__ import annotations
 
-import importlib.util
 import math
+import sys
 from collections.abc import Callable
 
 import numpy as np
 import pytest
-from conftest import EPS
+from conftest import EPS, needs_cvxpy
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import optimize
@@ -88,8 +90,8 @@ POLY_FIT_RTOL: float = 1e-10
 SMALL = irf.OPTIMISATION_NORMALS // 16
 """Normal count for fast solver tests (about 130 normals)."""
 
-needs_cvxpy = pytest.mark.skipif(importlib.util.find_spec("cvxpy") is None,
-                                 reason="the solver needs cvxpy (the tools extra)")
+UNCACHED: irf.Objective = irf.Objective("l2", margin=0.0125)
+"""An objective no other test solves, so that no compiled problem of this process hides a missing solver."""
 
 
 def unit(rng: np.random.Generator, n: int) -> np.ndarray:
@@ -471,3 +473,46 @@ class TestBadInput:
             irf.constrained_irradiance_grid([2.0], [3.0])
         with pytest.raises(ValueError, match="turbidity"):
             irf.constrained_irradiance_grid([0.5], [12.0])
+
+
+# --------------------------------------------------------------------------- #
+# Without the solver (the tools extra)
+# --------------------------------------------------------------------------- #
+@pytest.fixture()
+def no_solver(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The solver's packages unimportable and unfound in this test, whether or not they are installed."""
+    for name in irf.SOLVER_PACKAGES:
+        monkeypatch.setitem(sys.modules, name, None)
+
+
+@pytest.mark.usefixtures("no_solver")
+class TestWithoutTheSolver:
+    def test_reported_missing_by_name(self) -> None:
+        assert not irf.solver_available()
+        assert irf.missing_solver_packages() == irf.SOLVER_PACKAGES
+        message = irf.solver_missing_message("this task")
+        assert message.startswith("this task needs cvxpy and clarabel (the tools extra)")
+        assert message.endswith('pip install -e ".[tools]"') and "\n" not in message
+
+    def test_a_solve_refuses_with_the_install_command(self) -> None:
+        with pytest.raises(ModuleNotFoundError, match=r"needs cvxpy .*the tools extra.*pip install -e") as info:
+            irf.constrained_coefficients(sky_truth(30.0, 3.0), UNCACHED)
+        assert info.value.name == "cvxpy"
+
+    def test_build_table_refuses_before_any_work(self) -> None:
+        calls: list = []
+
+        def mapper(function: Callable, jobs: object) -> list:
+            calls.append(function)
+            return []
+
+        with pytest.raises(ModuleNotFoundError, match=r"the irradiance table needs cvxpy"):
+            irf.build_table((6, 4), (2, 1), mapper=mapper, held_out=(4, 1))
+        assert calls == []
+
+
+def test_available_exactly_when_every_package_is_found() -> None:
+    import importlib.util
+
+    found = all(importlib.util.find_spec(name) is not None for name in irf.SOLVER_PACKAGES)
+    assert irf.solver_available() is found and (irf.missing_solver_packages() == ()) is found

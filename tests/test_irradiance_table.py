@@ -21,7 +21,8 @@ The coefficient file's certified 3-band irradiance table as the runtime serves i
     converted light goes negative);
 -   defaults by intent, the old pipeline one option away, bad input;
 -   :func:`skysh.irradiance_fit.build_table` on synthetic optima (fast): its block, and its
-    refusal of a table that goes negative; a slow check against fresh convex solves.
+    refusal of a table that goes negative; a slow check against fresh convex solves (these three skipped
+    without cvxpy, the tools extra).
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ import math
 
 import numpy as np
 import pytest
+from conftest import needs_cvxpy
 
 from skysh import coefficient_file as cf
 from skysh import dering, fit, sh, shmin
@@ -309,6 +311,7 @@ def _synthetic(offset: float) -> object:
     return mapper
 
 
+@needs_cvxpy  # build_table refuses without the solver (its block records the solver's versions)
 class TestBuildTable:
     def test_block_and_exact_fit(self) -> None:
         table, degrees, block = irf.build_table((6, 4), (2, 1), mapper=_synthetic(3.0), held_out=(4, 1))
@@ -326,6 +329,7 @@ class TestBuildTable:
 
 
 @pytest.mark.slow
+@needs_cvxpy
 def test_table_against_fresh_solves(sky: SkySH) -> None:
     """Two held-out points solved afresh (in two orders: the solver is deterministic) vs the table."""
     jobs = [(0.6, 3.3, irf.RECOMMENDED), (1.45, 5.2, irf.RECOMMENDED)]

@@ -35,7 +35,7 @@ SKYSH: Path = ROOT / "skysh"
 
 LAYERS: dict[str, int] = {
     # 0: foundation (argument checks, version, the npz reader)
-    "_version": 0, "_checks": 0, "_npz": 0, "_mitsuba_data": 0, "argtypes": 0,
+    "_version": 0, "_checks": 0, "_npz": 0, "files": 0, "_mitsuba_data": 0, "argtypes": 0,
     # 1: SH mathematics and the fitted parameters' domain and basis
     "sh": 1, "poly": 1, "sun": 1,
     # 2: the sky model, and algorithms on SH coefficients alone
@@ -66,6 +66,7 @@ ALLOWED: dict[str, frozenset[str]] = {name: frozenset(deps) for name, deps in {
     "_version": (),
     "_checks": (),
     "_npz": (),
+    "files": (),
     "_mitsuba_data": (),
     "argtypes": (),
     "sh": ("_checks",),
@@ -79,7 +80,7 @@ ALLOWED: dict[str, frozenset[str]] = {name: frozenset(deps) for name, deps in {
     "solar": ("_checks", "poly", "sh", "preetham"),
     "dering": ("_checks", "sh", "shmin"),
     "sunlight": ("_checks", "_npz", "poly", "coefficient_file"),
-    "coefficient_file": ("_checks", "_npz", "_version", "poly", "sunlight"),
+    "coefficient_file": ("_checks", "_npz", "_version", "files", "poly", "sunlight"),
     "hosek": ("_checks", "_mitsuba_data", "ground", "preetham", "sh", "solar"),
     "fit": ("_checks", "coefficient_file", "poly", "preetham", "sh", "sunlight", "solar"),
     "lights": ("_checks", "coefficient_file", "ground", "poly", "preetham", "sh", "solar", "sunlight"),
@@ -87,7 +88,7 @@ ALLOWED: dict[str, frozenset[str]] = {name: frozenset(deps) for name, deps in {
     "export_dering": ("_checks", "dering", "sh", "shmin"),
     "irradiance_fit": ("_checks", "fit", "preetham", "sh", "shmin"),
     "engines": ("_checks", "sh"),
-    "render": ("_checks", "ground", "lights", "preetham", "runtime", "sh", "solar"),
+    "render": ("_checks", "files", "ground", "lights", "preetham", "runtime", "sh", "solar"),
     "export_lights": ("_checks", "coefficient_file", "ground", "lights", "poly", "preetham", "solar", "sunlight",
                       "export_dering"),
     "export": ("_checks", "_version", "coefficient_file", "poly", "preetham", "runtime", "sh", "export_lights",
@@ -95,9 +96,9 @@ ALLOWED: dict[str, frozenset[str]] = {name: frozenset(deps) for name, deps in {
     "export_js": ("_checks", "_version", "export", "export_lights", "export_js_parts", "preetham", "runtime", "sh", "engines"),
     "export_js_parts": ("export_lights", "export_dering"),
     "engine_sun": ("_checks", "engines"),
-    "viewer": ("_version", "engines", "export", "preetham", "render", "runtime", "sh", "sunlight"),
+    "viewer": ("_version", "engines", "export", "files", "preetham", "render", "runtime", "sh", "sunlight"),
     "cli_text": ("_checks", "engines", "engine_sun", "export", "sh"),
-    "cli": ("_checks", "_version", "argtypes", "cli_text", "engines", "export", "export_js", "poly", "preetham",
+    "cli": ("_checks", "_version", "argtypes", "cli_text", "engines", "export", "files", "export_js", "poly", "preetham",
             "render", "runtime", "sh", "sun", "viewer"),
     "__init__": ("_version", "runtime"),
     "__main__": ("cli",),

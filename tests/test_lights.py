@@ -450,6 +450,24 @@ class TestRefusals:
         with pytest.raises(ValueError, match="ground_albedo"):
             sky.irradiance_at([0.0, 0.0, 1.0], 0.5, 3.0, ground_albedo=bad)
 
+    @pytest.mark.parametrize("bad", [10**400, -10**400, 10**5000, 2, -1, (10**400, 0.1, 0.1)],
+                             ids=["1e400", "-1e400", "1e5000", "two", "minus-one", "triple-1e400"])
+    def test_ground_albedo_integers_beyond_range(self, sky: SkySH, bad: object) -> None:
+        """Issue 23: a Python int beyond float64 (10**400) was an OverflowError; now a ValueError naming
+        ground_albedo and [0, 1], by an exact comparison of the int (no float() on the per-frame path)."""
+        for kwargs in ({}, {"sun": True}):
+            with pytest.raises(ValueError, match=r"ground_albedo must (lie in \[0, 1\]|be a real number)"):
+                sky.coefficients(0.5, 3.0, ground_albedo=bad, **kwargs)
+        with pytest.raises(ValueError, match=r"ground_albedo must (lie in \[0, 1\]|be a real number)"):
+            sky.coefficients(np.array([0.5, 0.6]), 3.0, ground_albedo=bad)
+        if isinstance(bad, int):
+            with pytest.raises(ValueError, match=r"ground_albedo must lie in \[0, 1\], got (an integer of \d+ digits|-?\d)$"):
+                lights.check_albedo(bad)
+
+    def test_ground_albedo_integers_in_range(self, sky: SkySH) -> None:
+        assert lights.check_albedo(1) == (1.0, 1.0, 1.0) and lights.check_albedo(0) is None
+        np.testing.assert_array_equal(sky.coefficients(0.5, 3.0, ground_albedo=1), sky.coefficients(0.5, 3.0, ground_albedo=1.0))
+
     @pytest.mark.parametrize("bad", ["True", 1, 0.0, None, [True], np.array([True])])
     def test_sun_must_be_a_bool(self, sky: SkySH, bad: object) -> None:
         with pytest.raises(TypeError, match="sun"):

@@ -346,6 +346,14 @@ class TestCodec:
         with pytest.raises(ValueError, match="dc must be finite"):
             decompress(np.full(3, np.nan), words)
 
+    def test_ragged_words_name_words(self):
+        """Issue 23: a ragged ``words`` was numpy's "inhomogeneous shape" error, naming nothing."""
+        dc, words = compress(np.ones((9, 3)))
+        for ragged in ([[1, 2], [3], [4, 5]], [words[0].tolist(), words[1, :1].tolist(), words[2].tolist()]):
+            with pytest.raises(ValueError, match=r"^words must be a rectangular array of integers in \[0, 2\^32 - 1\]"):
+                decompress(dc, ragged)
+        np.testing.assert_array_equal(decompress(dc, words.tolist()), decompress(dc, words))  # a rectangular list passes
+
 
 # --------------------------------------------------------------------------- #
 class TestTable3:

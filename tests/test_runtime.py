@@ -271,6 +271,21 @@ class TestBatch:
                     assert slow.shape == np.shape(convert(ts)) + fast.shape
                     _close(fast, slow.reshape(fast.shape), PATH_RTOL)
 
+    @pytest.mark.parametrize("irradiance", [False, True], ids=["radiance", "irradiance"])
+    def test_batch_equals_scalar_with_the_sun_at_any_azimuth(self, sky: SkySH, irradiance: bool) -> None:
+        """Issue 23: the batch placed the sun's disk at the raw azimuth while the sky turned by the azimuth
+        reduced mod 2 pi, so they parted beyond |phi| ~ 1e4 (0.41 of DC at 1e16). Both now reduce alike."""
+        rng = np.random.default_rng(23)
+        phis = np.concatenate([[0.0, -0.0, 1e4, -1e6, 1e14, 1e16, -1e16, 1e300, -1e300, 1.7976931348623157e308],
+                               10.0 ** rng.uniform(4, 300, 40) * rng.choice([-1.0, 1.0], 40)])
+        ts, t = rng.uniform(0.0, HALF_PI, phis.size), rng.uniform(2.5, 6.0, phis.size)
+        for bands in (1, 3, 7):
+            options = dict(bands=bands, irradiance=irradiance, sun=True, ground_albedo=0.3)
+            batch = sky.coefficients(ts, t, phis, **options)
+            for i in range(phis.size):
+                one = sky.coefficients(float(ts[i]), float(t[i]), float(phis[i]), **options)
+                assert np.abs(batch[i] - one).max() <= PATH_RTOL * np.abs(one[0]).max(), (bands, phis[i])
+
     def test_integer_parameters(self, sky: SkySH) -> None:
         # Python ints take the array path; they must equal the float call.
         _close(sky.coefficients(1, 3, 2, bands=5), sky.coefficients(1.0, 3.0, 2.0, bands=5), PATH_RTOL)

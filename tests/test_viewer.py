@@ -26,7 +26,16 @@ Chromium is installed. What they check:
 -   screenshots at three settings are saved to ``build/viewer-shots/``.
 
 Server tests (no browser): loopback only, only the page's files (404 for any other
-path, ``..`` and encoded traversal), a foreign Host header refused, Ctrl-C stops it.
+path, ``..`` and encoded traversal), a foreign Host header refused, Ctrl-C stops it; and
+(issue 23, on 127.0.0.1 with a short timeout) a silent or half-sent connection closed
+within the timeout (not before it, while a server with the default timeout keeps one), a
+request waiting for a free handler served, half-open connections held to the thread bound
+(a negative control without it reaches 60 threads), a client's early disconnect without a
+traceback (socketserver's own error handler, the control, prints one) and bad limits refused.
+
+Read-out tests (no browser: ``sky.js`` under ``node``, skipped without node): numbers below
+1e-12 of DC print as 0 and -0 as 0, in the JSON and in every engine's snippet, on settings
+whose unrounded numbers hold such noise (the control), the rest equal to the Python runtime.
 
 Speed (issue 14): one browser; the pages from ``file://`` and from the server load at the
 same time; the tests set the controls by script (:data:`SET_CONTROLS`, one frame per setting),
@@ -37,14 +46,22 @@ subprocess starts in the background when the module begins (its test runs last).
 from __future__ import annotations
 
 import base64
+import concurrent.futures
+import contextlib
 import functools
 import http.client
 import json
 import math
 import re
+import shutil
+import socket
+import socketserver
+import struct
+import subprocess
 import sys
 import threading
-from collections.abc import Iterator
+import time
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -742,6 +759,315 @@ def test_server_serves_the_page_files_and_nothing_else(server: Any, static_dir: 
     assert _get(server, "/", method="PUT")[0] >= 400
     assert _get(server, "/", host="attacker.example:80")[0] == 403  # DNS rebinding
     assert _get(server, "/", host=f"localhost:{server.server_address[1]}")[0] == 200
+
+
+# --------------------------------------------------------------------------- #
+# Server robustness (issue 23): idle connections, bounded threads, early disconnects
+# --------------------------------------------------------------------------- #
+SHORT_TIMEOUT_S: float = 0.5
+"""The tests' server timeout (make_server's ``timeout``; the default is viewer.IDLE_TIMEOUT_S): short, so that
+waiting for the server to close a connection takes half a second."""
+
+CLOSE_MARGIN_S: float = 2.0
+"""How much later than its timeout the server may close a silent connection: its handler thread wakes from the
+socket timeout on a shared 2-core machine (measured: about 5 ms late)."""
+
+TIMER_SLACK_S: float = 0.05
+"""How much earlier than its timeout the server may seem to close it: its timer starts when it accepts the connection
+or reads its last byte, after the client's clock starts; this covers the clocks' granularity."""
+
+TEST_MAX_CONNECTIONS: int = 4
+"""The tests' bound on connections handled at once (make_server's ``max_connections``)."""
+
+HALF_OPEN: int = 60
+"""Half-open connections the thread test holds at once: 15 times the bound, within viewer.LISTEN_BACKLOG."""
+
+THREAD_MARGIN: int = 3
+"""Threads the rest of the test process may start while the count is watched (the module's background job,
+pytest's own), on top of the server's handler threads; the server's are also counted exactly by name."""
+
+SETTLE_S: float = 0.5
+"""How long the thread count is watched once the bound is reached: the accept loop takes a waiting connection
+within a millisecond, so unbounded growth would show many times over."""
+
+DEADLINE_S: float = 10.0
+"""Hang guard of a wait on the server's threads (they end within milliseconds once their clients close)."""
+
+EARLY_ROUNDS: int = 3
+"""Early disconnects of each kind per run: each raised BrokenPipeError or ConnectionResetError in the server in
+every trial (10 of 10), so the negative control sees at least one traceback."""
+
+POLL_S: float = 0.02
+"""serve_forever's shutdown poll in these tests (its default 0.5 s would make each shutdown wait that long)."""
+
+HALF_REQUEST: bytes = b"GET / HTTP/1.1\r\nHost: 127.0.0.1\r\n"
+"""A request stopped half-way: its header block never ends."""
+
+
+@contextlib.contextmanager
+def _running(sky: SkySH, **options: Any) -> Iterator[Any]:
+    """make_server(**options) serving on a thread, shut down at the end."""
+    srv = viewer.make_server("127.0.0.1", 0, sky, **options)
+    thread = threading.Thread(target=srv.serve_forever, args=(POLL_S,), daemon=True)
+    thread.start()
+    try:
+        yield srv
+    finally:
+        srv.shutdown()
+        srv.server_close()
+        thread.join(timeout=DEADLINE_S)
+
+
+def _server_threads(srv: Any) -> int:
+    """The handler threads of ``srv`` alive in this process (named viewer.CONNECTION_THREAD:PORT)."""
+    name = f"{viewer.CONNECTION_THREAD}:{srv.server_address[1]}"
+    return sum(thread.name == name for thread in threading.enumerate())
+
+
+def _wait_threads(srv: Any, done: Callable[[int], bool]) -> int:
+    """Wait (at most DEADLINE_S) until ``done(handler thread count of srv)``; that count."""
+    deadline = time.monotonic() + DEADLINE_S
+    while not done(count := _server_threads(srv)) and time.monotonic() < deadline:
+        time.sleep(0.005)
+    return count
+
+
+def _connect(server: Any, small_buffer: bool = False) -> socket.socket:
+    sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    if small_buffer:  # a 4 KiB window: the server's 365 kB answer cannot all be sent before the client acts
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+    sock.settimeout(DEADLINE_S)
+    sock.connect(server.server_address[:2])
+    return sock
+
+
+def _closed_after(sock: socket.socket, start: float) -> float:
+    """Seconds from ``start`` until the server closed ``sock`` (an end of file or a reset)."""
+    try:
+        while sock.recv(4096):
+            pass
+    except ConnectionResetError:
+        pass
+    return time.monotonic() - start
+
+
+def test_server_closes_idle_connections_after_its_timeout(sky: SkySH, server: Any, capfd: pytest.CaptureFixture[str]) -> None:
+    with _running(sky, timeout=SHORT_TIMEOUT_S, max_connections=2) as srv, \
+            concurrent.futures.ThreadPoolExecutor(1) as pool, _connect(server) as patient:
+        start = time.monotonic()  # before the connections: the server's timers start after it
+        silent, half = _connect(srv), _connect(srv)
+        half.sendall(HALF_REQUEST)
+        waiting = pool.submit(_get, srv, "/")  # both handlers busy: it waits in the backlog until one is free
+        with silent, half:
+            closed = [_closed_after(sock, start) for sock in (silent, half)]
+        status = waiting.result(timeout=DEADLINE_S)[0]
+        waited = time.monotonic() - start
+        patient.setblocking(False)
+        with pytest.raises(BlockingIOError):  # negative control: the module's server (default timeout) keeps it
+            patient.recv(1)
+    for seconds in closed:
+        assert SHORT_TIMEOUT_S - TIMER_SLACK_S <= seconds <= SHORT_TIMEOUT_S + CLOSE_MARGIN_S, closed
+    assert status == 200 and waited >= SHORT_TIMEOUT_S - TIMER_SLACK_S  # served once a slot was free, not refused
+    assert "Traceback" not in capfd.readouterr().err  # a timed-out connection is dropped quietly
+    assert viewer.IDLE_TIMEOUT_S > SHORT_TIMEOUT_S + CLOSE_MARGIN_S  # the control's server outlasts the wait
+
+
+def _hold_half_open(srv: Any, count: int, saturated: int) -> tuple[int, int, int]:
+    """Open ``count`` connections that stop half-way through their request; once ``saturated`` handler threads run,
+    watch them for SETTLE_S. Peak handler threads, peak growth of threading.active_count(), threads left after the
+    clients closed."""
+    baseline = threading.active_count()
+    clients = []
+    try:
+        for _ in range(count):
+            clients.append(_connect(srv))
+            clients[-1].sendall(HALF_REQUEST)
+        peak = _wait_threads(srv, lambda n: n >= saturated)
+        growth = threading.active_count() - baseline
+        end = time.monotonic() + SETTLE_S
+        while time.monotonic() < end:
+            peak, growth = max(peak, _server_threads(srv)), max(growth, threading.active_count() - baseline)
+            time.sleep(0.01)
+    finally:
+        for sock in clients:
+            sock.close()
+    return peak, growth, _wait_threads(srv, lambda n: n == 0)
+
+
+def test_half_open_connections_do_not_grow_the_threads(sky: SkySH) -> None:
+    with _running(sky, max_connections=TEST_MAX_CONNECTIONS) as srv:  # default timeout: none expires while watched
+        peak, growth, left = _hold_half_open(srv, HALF_OPEN, TEST_MAX_CONNECTIONS)
+        assert peak == TEST_MAX_CONNECTIONS  # saturated, never above
+        assert growth <= TEST_MAX_CONNECTIONS + THREAD_MARGIN
+        assert left == 0
+        assert _get(srv, "/")[0] == 200  # the waiting connections were all handled; the server still answers
+
+
+def test_half_open_count_control_without_the_bound(sky: SkySH) -> None:
+    """Negative control: with the bound at HALF_OPEN the same connections do reach that many threads."""
+    with _running(sky, max_connections=HALF_OPEN) as srv:
+        peak, growth, left = _hold_half_open(srv, HALF_OPEN, HALF_OPEN)
+        assert peak == HALF_OPEN and growth > TEST_MAX_CONNECTIONS + THREAD_MARGIN and left == 0
+
+
+def _handled(srv: Any) -> threading.Semaphore:
+    """A semaphore released each time ``srv`` is done with a connection (its error report, if any, written)."""
+    done = threading.Semaphore(0)
+    original = srv.process_request_thread
+
+    def counted(request: Any, client_address: Any) -> None:
+        try:
+            original(request, client_address)
+        finally:
+            done.release()
+
+    srv.process_request_thread = counted
+    return done
+
+
+def _disconnect_early(srv: Any, handled: threading.Semaphore, read_first: bool) -> None:
+    """Send a request and reset the connection (SO_LINGER 0) before reading the answer, or after its first byte;
+    return once the server is done with it."""
+    with _connect(srv, small_buffer=True) as sock:
+        sock.sendall(b"GET / HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n")
+        if read_first:
+            sock.recv(1)
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+    assert handled.acquire(timeout=DEADLINE_S)
+
+
+def test_early_disconnect_prints_no_traceback(sky: SkySH, capfd: pytest.CaptureFixture[str]) -> None:
+    with _running(sky) as srv:  # the default timeout: no connection times out while the client is slow to act
+        handled = _handled(srv)
+        capfd.readouterr()
+        for read_first in (False, True) * EARLY_ROUNDS:
+            _disconnect_early(srv, handled, read_first)
+        err = capfd.readouterr().err
+        assert "Traceback" not in err and len(err.splitlines()) <= 2 * EARLY_ROUNDS, err  # one line each at most
+        assert _get(srv, "/")[0] == 200
+        # negative control: socketserver's own handle_error shows that each disconnect did raise in the server
+        srv.handle_error = functools.partial(socketserver.BaseServer.handle_error, srv)
+        for read_first in (False, True) * EARLY_ROUNDS:
+            _disconnect_early(srv, handled, read_first)
+        err = capfd.readouterr().err
+        assert err.count("Traceback") >= 1 and ("ConnectionResetError" in err or "BrokenPipeError" in err), err
+
+
+@pytest.mark.parametrize(("option", "value"), [
+    ("timeout", 0.0), ("timeout", -1.0), ("timeout", math.inf), ("timeout", math.nan), ("timeout", True),
+    ("timeout", "5"), ("max_connections", 0), ("max_connections", 2.0), ("max_connections", True),
+])
+def test_server_refuses_bad_limits(option: str, value: Any) -> None:
+    with pytest.raises(ValueError, match=option):
+        viewer.make_server("127.0.0.1", 0, **{option: value})
+
+
+# --------------------------------------------------------------------------- #
+# The read-out's numbers, under node (no browser)
+# --------------------------------------------------------------------------- #
+NOISE_FLOOR: float = 1e-12
+"""The issue's rule (23): a read-out number below this fraction of the DC term (the largest |coefficient of row 0|
+over the channels) prints as 0, as skysh.engines.snippet's: rounding noise of the rotation to the sun's azimuth."""
+
+NODE_TIMEOUT_S: float = 120.0
+"""Hang guard of the node run (it takes well under a second)."""
+
+READOUT_SCRIPT: str = r"""
+const fs = require("fs"), vm = require("vm"), url = require("url");
+const [skyJs, runtimePath] = process.argv.slice(2);
+vm.runInThisContext(fs.readFileSync(skyJs, "utf8"), { filename: skyJs }); // the page's classic script, as loaded
+const input = JSON.parse(fs.readFileSync(0, "utf8"));
+import(url.pathToFileURL(runtimePath).href).then((runtime) => {
+  const S = globalThis.SkyshSky;
+  const raw = (s) => Array.from(runtime.coefficients(s.sunZenith, s.turbidity, s.sunAzimuth,
+    S.runtimeOptions(s, s.engine === null ? { irradiance: s.irradiance } : { engine: s.engine })), S.pyRepr);
+  const printed = S.printable(input.values, S.dcTerm(input.values));
+  process.stdout.write(JSON.stringify({
+    floor: S.NOISE_FLOOR, readouts: input.states.map((s) => S.readout(runtime, input.config, s)),
+    raw: input.states.map(raw), json: JSON.stringify(printed), repr: printed.map(S.pyRepr),
+  }));
+});
+"""
+"""Runs sky.js (the page's read-out: SkyshSky.readout, which viewer.js shows) with the exported JavaScript runtime on
+stdin's {config, states, values}; prints the read-outs, the runtime's unrounded numbers (as Python's repr) and the
+rule applied to values."""
+
+HAND_VALUES: list[float] = [-2.0, 1.0, 0.5, 8.77e-14, -0.0, 1.99e-12, -1.99e-12, 2e-12, -2e-12, 3.5e-12, 1e-300, 0.25, 0.0]
+"""Coefficient-major RGB numbers with DC 2 (a negative channel): the floor is 2e-12, and its ends on both sides."""
+
+
+def _controls(sun_zenith: float, sun_azimuth: float, bands: int, engine: str | None = None, irradiance: bool = False,
+              readout_format: str = "json", table: bool = True) -> dict[str, Any]:
+    """The page's controls() (angles in degrees here) with its defaults by intent, turbidity 3."""
+    diffuse = engine is not None or irradiance
+    return {"sunZenith": math.radians(sun_zenith), "sunAzimuth": math.radians(sun_azimuth), "turbidity": 3.0,
+            "bands": bands, "gibbs": not diffuse, "dering": diffuse and bands == 3, "irradianceTable": table,
+            "engine": engine, "irradiance": irradiance, "readoutFormat": readout_format}
+
+
+READOUT_STATES: list[dict[str, Any]] = [
+    _controls(40.1, 0.0, 7), _controls(40.1, 90.0, 3, irradiance=True), _controls(65.0, 180.0, 5, table=False),
+    *(_controls(40.1, 90.0, 3, engine=e, readout_format=f) for e in engines.ENGINES for f in ("json", "snippet")),
+]
+"""Settings at azimuths where the rotation leaves noise in terms that are zero (every kind of read-out)."""
+
+
+@pytest.fixture(scope="module")
+def node_readouts(tmp_path_factory: pytest.TempPathFactory, sky: SkySH, exported: Any) -> dict[str, Any]:
+    node = shutil.which("node")
+    if node is None:
+        pytest.skip("node is not on PATH (apt-get install nodejs, or https://nodejs.org): the read-out test skipped")
+    folder = tmp_path_factory.mktemp("readout")
+    (folder / "readout.cjs").write_text(READOUT_SCRIPT)
+    (folder / "runtime.mjs").write_text(exported("js", bands=None))
+    data = {"config": viewer.page_config(sky), "states": READOUT_STATES, "values": HAND_VALUES}
+    run = subprocess.run([node, str(folder / "readout.cjs"), str(viewer.WEB_DIR / "sky.js"), str(folder / "runtime.mjs")],
+                         input=json.dumps(data), capture_output=True, text=True, timeout=NODE_TIMEOUT_S, check=False)
+    assert run.returncode == 0, run.stderr
+    return {**json.loads(run.stdout), "config": data["config"]}
+
+
+def _rounded(values: np.ndarray, dc: float) -> np.ndarray:
+    """The issue's rule in Python: below NOISE_FLOOR * dc -> 0 (positive)."""
+    return np.where(np.abs(values) < NOISE_FLOOR * dc, 0.0, values) + 0.0
+
+
+def test_readout_rule_on_chosen_numbers(node_readouts: dict[str, Any]) -> None:
+    assert node_readouts["floor"] == NOISE_FLOOR
+    expected = _rounded(np.array(HAND_VALUES), 2.0).tolist()
+    assert json.loads(node_readouts["json"]) == expected and "-0" not in node_readouts["json"]
+    assert node_readouts["repr"] == [repr(float(v)) for v in expected]  # '0.0' for 8.77e-14 and -0.0; 2e-12 kept
+    assert expected.count(0.0) == 6  # the control: the rule had six numbers to change
+
+
+def _tokens(item: Any) -> list[str]:
+    return [token for part in item for token in _tokens(part)] if isinstance(item, list) else [item]
+
+
+@pytest.mark.parametrize("k", range(len(READOUT_STATES)))
+def test_readout_prints_rotation_noise_as_zero(node_readouts: dict[str, Any], sky: SkySH, k: int) -> None:
+    state, text = READOUT_STATES[k], node_readouts["readouts"][k]
+    engine = state["engine"]
+    radiance = engine_radiance(sky, state) if engine else runtime_coefficients(sky, state, irradiance=state["irradiance"])
+    expected = engines.convert(radiance, engine).ravel() if engine else radiance.ravel()
+    dc = float(np.max(np.abs(radiance[0])))
+    scale = DC_TOLERANCE * max(dc, float(np.max(np.abs(expected))))
+    raw = np.array([float(text) for text in node_readouts["raw"][k]])  # Python's repr: -0.0 keeps its sign
+    assert np.any((np.abs(raw) < NOISE_FLOOR * dc) & ((raw != 0) | np.signbit(raw)))  # control: noise to print as 0
+    if state["readoutFormat"] == "snippet":
+        _, _, shown = viewer._numbers(text)
+        assert not re.search(r"(?<![\w.])-0\.0(?![\d])", text)
+        template = node_readouts["config"]["snippets"][engine][str(state["bands"])]  # the page's
+        assert viewer._same_snippet(text, viewer.fill_snippet(template, _rounded(expected, dc)), scale)
+        assert viewer._same_snippet(text, engines.snippet(radiance, engine), scale)  # the Python side's snippet
+    else:
+        payload = json.loads(text, parse_float=str, parse_int=str)
+        tokens = _tokens(payload["values" if engine else "coefficients"])
+        assert not any(token.startswith("-") and float(token) == 0.0 for token in tokens), tokens
+        shown = np.array([float(token) for token in tokens])
+        assert np.max(np.abs(shown - _rounded(expected, dc))) <= scale
+    assert np.all((shown == 0.0) | (np.abs(shown) >= NOISE_FLOOR * dc))  # every number printed is 0 or above the floor
+    assert np.any(shown == 0.0)
 
 
 @pytest.fixture(scope="module")

@@ -13,6 +13,11 @@ Run::
     python tools/error_report.py --out docs/report              # the committed report
     python tools/error_report.py --out /tmp/r --sections 5,9    # some sections
 
+A section that needs an optional package which is not installed (section 11:
+cvxpy, the tools extra) is skipped: one line on stderr before any work, and
+report.md says so under its heading, in the summary table and in the section list
+(package, extra, ``pip install -e ".[tools]"``); the rest completes, exit status 0.
+
 ``--quick`` uses small grids and few samples (the test suite's smoke run); the
 full run takes minutes on 2 cores, with progress bars. BLAS is limited to one
 thread per process (multi-threaded OpenBLAS on a loaded 2-core machine turns a

@@ -27,6 +27,13 @@ the installed package, also through a symlink or hard link) is replaced only
 when named with ``--out`` and ``--force`` together; any other file is written
 (atomically) whether it exists or not. Every refusal is one line
 ``<prog>: error: ...`` on stderr with exit status 2.
+
+The irradiance table is a required table of the file format
+(``skysh.coefficient_file.TABLES``), so without cvxpy every run refuses before
+any projection (``--compare-scalings`` too: it also writes the file)::
+
+    fit_sky.py: error: fitting the certified irradiance table needs cvxpy and clarabel (the tools extra), which
+    are not installed: pip install -e ".[tools]"
 """
 
 from __future__ import annotations
@@ -50,7 +57,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import skysh  # noqa: E402
-from skysh import coefficient_file, fit, irradiance_fit, sh, sunlight  # noqa: E402
+from skysh import coefficient_file, files, fit, irradiance_fit, sh, sunlight  # noqa: E402
 from skysh._version import __version__  # noqa: E402
 
 QUICK_GRID = (16, 8)
@@ -63,6 +70,8 @@ SUN_GOAL: float = 1e-4
 """Issue 15's goal for the sun table: worst held-out relative error (skysh.fit.SUN_ERROR_DEFINITION)."""
 QUICK_IRRADIANCE_HELD_OUT: tuple[int, int] = (8, 1)
 """--quick: exact solves for the irradiance table's fit error (random points, per edge; plus the corners)."""
+IRRADIANCE_TASK: str = "fitting the certified irradiance table"
+"""What needs cvxpy, in the refusal when it is missing (the table is required by the file format)."""
 MAX_SAMPLES: int = 1_000_000
 """Largest --samples: a projection holds about 55 floats per sample at 7 bands (440 MB at the bound) per worker."""
 
@@ -123,10 +132,13 @@ def check_arguments(parser: argparse.ArgumentParser, args: argparse.Namespace) -
             "--out is required: name the file to write, e.g. --out /tmp/sky.npz (the shipped "
             "data/preetham_sh.npz is replaced only with --out data/preetham_sh.npz --force)"
         )
-    if is_shipped_file(args.out) and not args.force:
+    shipped = is_shipped_file(args.out)
+    if shipped and not args.force:
         parser.error(f"--out {args.out} is the shipped coefficient file; add --force to replace it")
-    if args.out.is_dir():
-        parser.error(f"--out {args.out} is a directory; name a file")
+    try:  # a directory, or any other of the package's own files (modules, the viewer's page), even with --force
+        files.check_output(args.out, "--out", may_replace=args.out if shipped else None)
+    except (TypeError, ValueError) as error:
+        parser.error(str(error))
     if args.colourspace not in coefficient_file.FILE_COLOURSPACES:
         parser.error(f"--colourspace must be one of: {', '.join(coefficient_file.FILE_COLOURSPACES)}; got {args.colourspace!r}")
     top = coefficient_file.MAX_FILE_DEGREE
@@ -141,6 +153,8 @@ def check_arguments(parser: argparse.ArgumentParser, args: argparse.Namespace) -
         parser.error(f"--tolerance must lie in (0, 1), got {args.tolerance}")
     if not 1 <= args.jobs <= MAX_JOBS:
         parser.error(f"--jobs must be an integer in [1, {MAX_JOBS}], got {args.jobs}")
+    if not irradiance_fit.solver_available():  # every file has the irradiance table: refuse before the projections
+        parser.error(irradiance_fit.solver_missing_message(IRRADIANCE_TASK))
 
 
 def print_sun(sky_table: coefficient_file.SkyTable) -> None:

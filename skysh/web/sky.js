@@ -1,6 +1,6 @@
-// skysh viewer: the CPU side of the page, in double precision, no DOM.
+// skysh viewer: the CPU side of the page, in double precision, no DOM (it also runs under node).
 // The true Preetham sky (1999, appendix), the real SH basis (skysh.sh's recurrence), the error
-// numbers and the number formats of the engine snippets. Every constant comes from the page's
+// numbers, the number formats of the engine snippets and the read-out text. Every constant comes from the page's
 // configuration, which skysh.viewer generates from skysh.preetham, skysh.sh and skysh.engines.
 "use strict";
 
@@ -197,5 +197,104 @@
     return template.replace(/\{\{(\d+):(\w+)\}\}/g, (_, k, fmt) => NUMBER_FORMATS[fmt](values[Number(k)]));
   }
 
-  globalThis.SkyshSky = { create, pyRepr, fillSnippet, NUMBER_FORMATS };
+  // ------------------------------------------------------------------ the read-out
+  /**
+   * Numbers below this fraction of the DC term print as 0 (and -0 as 0): rounding noise of the rotation to the
+   * sun's azimuth (terms that are zero for the sky come out near 1e-17 of DC). skysh.engines.snippet's rule too.
+   */
+  const NOISE_FLOOR = 1e-12;
+
+  /** The DC term of coefficient-major RGB coefficients c: the largest |coefficient of row 0| over the channels. */
+  function dcTerm(c) {
+    return Math.max(Math.abs(c[0]), Math.abs(c[1]), Math.abs(c[2]));
+  }
+
+  /** values as the read-out prints them: each |v| below NOISE_FLOOR * dc, and -0, as 0. */
+  function printable(values, dc) {
+    const floor = NOISE_FLOOR * dc;
+    return Array.from(values, (v) => (v === 0 || Math.abs(v) < floor ? 0 : v));
+  }
+
+  const DEG = Math.PI / 180.0;
+  const NUMBER_LIST = /\[\s*(-?[0-9.eE+-]+(?:,\s*-?[0-9.eE+-]+)*)\s*\]/g;
+
+  function nest(values, shape) {
+    const rows = [];
+    const width = values.length / shape[0];
+    for (let i = 0; i < shape[0]; i++) rows.push(Array.prototype.slice.call(values, i * width, (i + 1) * width));
+    return rows;
+  }
+
+  /** The runtime's options of the controls s (unticked table: the old pipeline, as irradiance_table=False). */
+  function runtimeOptions(s, extra) {
+    return { bands: s.bands, gibbs: s.gibbs, dering: s.dering, ...(s.irradianceTable ? {} : { irradianceTable: false }), ...extra };
+  }
+
+  /** Whether the runtime takes the certified irradiance table for these controls (its rule, by intent). */
+  function usesTable(s, diffuse) {
+    return s.irradianceTable && diffuse && s.bands === 3 && !s.gibbs && s.dering;
+  }
+
+  /** The numbers of the read-out and their DC term: of the coefficients, or of the radiance an engine converts. */
+  function readoutValues(runtime, s) {
+    const frame = [s.sunZenith, s.turbidity, s.sunAzimuth];
+    if (s.engine === null) {
+      const values = runtime.coefficients(...frame, runtimeOptions(s, { irradiance: s.irradiance }));
+      return { values, dc: dcTerm(values) };
+    }
+    const values = runtime.coefficients(...frame, runtimeOptions(s, { engine: s.engine }));
+    const radiance = runtime.coefficients(...frame, runtimeOptions(s, { irradianceTable: usesTable(s, true) }));
+    return { values, dc: dcTerm(radiance) };
+  }
+
+  /**
+   * The read-out text for the controls s (viewer.js's controls()): the coefficients as `skysh coeffs --format json`
+   * writes them, or the engine snippet; numbers below NOISE_FLOOR of DC as 0. runtime: the JavaScript runtime of
+   * skysh.export; config: skysh.viewer.page_config.
+   */
+  function readout(runtime, config, s) {
+    let values, dc;
+    try {
+      ({ values, dc } = readoutValues(runtime, s));
+    } catch (error) {
+      return `// ${error.message}`;
+    }
+    values = printable(values, dc);
+    if (s.readoutFormat === "snippet") {
+      if (s.engine === null) return "// Choose an engine preset for a paste-ready snippet (the JSON holds skysh's own coefficients).";
+      return fillSnippet(config.snippets[s.engine][String(s.bands)], values);
+    }
+    const info = {
+      skysh_version: runtime.SKYSH_VERSION,
+      quantity: s.irradiance ? "irradiance" : "radiance",
+      bands: s.bands,
+      sun_zenith_deg: s.sunZenith / DEG,
+      sun_azimuth_deg: s.sunAzimuth / DEG,
+      sun_zenith_rad: s.sunZenith,
+      sun_azimuth_rad: s.sunAzimuth,
+      turbidity: s.turbidity,
+      gibbs: s.gibbs,
+      dering: s.dering,
+      irradiance_table: usesTable(s, s.irradiance || s.engine !== null),
+      colourspace: config.colourspace,
+    };
+    let payload;
+    if (s.engine !== null) {
+      const layout = runtime.engineLayout(s.engine, s.bands);
+      payload = { values: nest(values, layout.shape), engine: s.engine, shape: layout.shape, labels: layout.labels, ...info };
+    } else {
+      const lm = [];
+      for (let l = 0; l < s.bands; l++) for (let m = -l; m <= l; m++) lm.push([l, m]);
+      payload = {
+        coefficients: nest(values, [s.bands * s.bands]), lm, ...info, up: "z",
+        units: s.irradiance ? "cd/m^2*sr" : "cd/m^2",
+        convention: "real orthonormal SH with the Condon-Shortley phase, index l(l+1)+m; Z up, azimuth from +X towards +Y",
+      };
+    }
+    return JSON.stringify(payload, null, 1).replace(NUMBER_LIST, (_, list) => `[${list.split(/\s+/).join(" ")}]`);
+  }
+
+  globalThis.SkyshSky = {
+    create, pyRepr, fillSnippet, NUMBER_FORMATS, NOISE_FLOOR, dcTerm, printable, runtimeOptions, usesTable, readout,
+  };
 })();

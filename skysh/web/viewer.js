@@ -88,69 +88,8 @@
   }
 
   // ------------------------------------------------------------------ read-out
-  const NUMBER_LIST = /\[\s*(-?[0-9.eE+-]+(?:,\s*-?[0-9.eE+-]+)*)\s*\]/g;
-
-  function nest(values, shape) {
-    const rows = [];
-    const width = values.length / shape[0];
-    for (let i = 0; i < shape[0]; i++) rows.push(Array.prototype.slice.call(values, i * width, (i + 1) * width));
-    return rows;
-  }
-
-  /** The runtime's options of the controls (unticked table: the old pipeline, as irradiance_table=False). */
-  function optionsOf(s, extra) {
-    return { bands: s.bands, gibbs: s.gibbs, dering: s.dering, ...(s.irradianceTable ? {} : { irradianceTable: false }), ...extra };
-  }
-
-  /** Whether the runtime takes the certified irradiance table for these controls (its rule, by intent). */
-  function usesTable(s, diffuse) {
-    return s.irradianceTable && diffuse && s.bands === 3 && !s.gibbs && s.dering;
-  }
-
-  /** The read-out text: the coefficients as `skysh coeffs --format json` writes them, or the engine snippet. */
-  function readout(s) {
-    const options = optionsOf(s, {});
-    if (s.engine !== null) options.engine = s.engine;
-    else options.irradiance = s.irradiance;
-    let values;
-    try {
-      values = runtime.coefficients(s.sunZenith, s.turbidity, s.sunAzimuth, options);
-    } catch (error) {
-      return `// ${error.message}`;
-    }
-    if (s.readoutFormat === "snippet") {
-      if (s.engine === null) return "// Choose an engine preset for a paste-ready snippet (the JSON holds skysh's own coefficients).";
-      return SkyshSky.fillSnippet(config.snippets[s.engine][String(s.bands)], values);
-    }
-    const info = {
-      skysh_version: runtime.SKYSH_VERSION,
-      quantity: s.irradiance ? "irradiance" : "radiance",
-      bands: s.bands,
-      sun_zenith_deg: s.sunZenith / DEG,
-      sun_azimuth_deg: s.sunAzimuth / DEG,
-      sun_zenith_rad: s.sunZenith,
-      sun_azimuth_rad: s.sunAzimuth,
-      turbidity: s.turbidity,
-      gibbs: s.gibbs,
-      dering: s.dering,
-      irradiance_table: usesTable(s, s.irradiance || s.engine !== null),
-      colourspace: config.colourspace,
-    };
-    let payload;
-    if (s.engine !== null) {
-      const layout = runtime.engineLayout(s.engine, s.bands);
-      payload = { values: nest(values, layout.shape), engine: s.engine, shape: layout.shape, labels: layout.labels, ...info };
-    } else {
-      const lm = [];
-      for (let l = 0; l < s.bands; l++) for (let m = -l; m <= l; m++) lm.push([l, m]);
-      payload = {
-        coefficients: nest(values, [s.bands * s.bands]), lm, ...info, up: "z",
-        units: s.irradiance ? "cd/m^2*sr" : "cd/m^2",
-        convention: "real orthonormal SH with the Condon-Shortley phase, index l(l+1)+m; Z up, azimuth from +X towards +Y",
-      };
-    }
-    return JSON.stringify(payload, null, 1).replace(NUMBER_LIST, (_, list) => `[${list.split(/\s+/).join(" ")}]`);
-  }
+  // The text is SkyshSky.readout's (sky.js, no DOM: the tests run it under node too).
+  const optionsOf = (s, extra) => SkyshSky.runtimeOptions(s, extra);
 
   async function copyReadout() {
     const text = $("readout").value;
@@ -326,7 +265,7 @@
     $("error-value").textContent = percent(numbers.error);
     $("ringing-value").textContent = percent(numbers.ringing);
     $("exposure-value").textContent = `${exposure.toPrecision(4)} per cd/m\u00b2`;
-    const text = readout(s);
+    const text = SkyshSky.readout(runtime, config, s);
     if ($("readout").value !== text) $("readout").value = text;
     current = { ...s, coefficients: Array.from(coeffs), irradianceCoefficients: Array.from(irr), exposure, ...numbers, rects };
     viewer.frame += 1;

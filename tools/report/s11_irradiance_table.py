@@ -15,6 +15,9 @@ The tabulated row comes from the runtime when it ships the table
 and the file's ``irradiance`` table); until then from the study's grid solve of the
 recommended objective, fitted as the sky table (the study's cache if present, else
 solved in this run).
+
+The per-sky optima are convex problems (cvxpy + Clarabel, the tools extra): without them
+:func:`missing_packages` names what is missing and the report skips this section.
 """
 
 from __future__ import annotations
@@ -79,6 +82,9 @@ ISSUE_FIGURES: dict[str, tuple[float, float | None]] = {
 }
 """Issue 18's table: worst error (worst sky, median sky or None) of each method, as filed.
 The issue's "today's gibbs=False, dering=True" and "today's default (gibbs=True)" rows are the runtime's."""
+
+missing_packages: Callable[[], tuple[str, ...]] = irf.missing_solver_packages
+"""The optional packages this section needs that are not installed (:mod:`report.run` asks before any work)."""
 
 OPTIMA: tuple[str, ...] = tuple(study.objective_name(o) for o in study.ISSUE_OBJECTIVES[:3])
 """The per-sky optima whose figures the issue gives (their differences are the evaluation's, not the method's)."""
