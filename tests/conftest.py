@@ -94,6 +94,12 @@ NO_MATPLOTLIB: str = "import sys; sys.modules['matplotlib'] = None  # a plain in
 NO_CVXPY: str = f"import sys; sys.modules.update(dict.fromkeys({irradiance_fit.SOLVER_PACKAGES!r}))  # no tools extra\n"
 """Python source that makes the solver's packages unimportable (and unfound), whether or not they are installed."""
 
+SKIP_NO_GLSLANG: str = "glslangValidator is not installed: apt-get install glslang-tools (.ci/run installs it)"
+SKIP_NO_NODE: str = "node is not installed: install Node.js >= 18, e.g. apt-get install nodejs"
+SKIP_NO_CC: str = "no C compiler on this machine: apt-get install gcc"
+SKIP_NO_TSC: str = "typescript (tsc) is not installed: npm ci --prefix tests/js (the declarations are checked structurally)"
+"""Skip reasons of the tests that drive an optional tool, each naming the command that brings it."""
+
 needs_cvxpy = pytest.mark.skipif(not irradiance_fit.solver_available(),
                                  reason=irradiance_fit.solver_missing_message("this test"))
 """Skips a test that solves (cvxpy and Clarabel: the tools extra), saying what to install."""

@@ -58,7 +58,7 @@ from typing import Any
 import numpy as np
 import pytest
 from background import GLSLANG, RUN_DIR, ToolJob, ToolRuns, glslang_job, selected_names
-from conftest import PLAIN_DIP, Exported, dc_relative_error, engine_cases, is_padded_identity
+from conftest import PLAIN_DIP, SKIP_NO_CC, SKIP_NO_GLSLANG, Exported, dc_relative_error, engine_cases, is_padded_identity
 from test_export_lights import CC, c_harness_job, compile_harness
 
 from skysh import SkySH, cli, preetham, sh, shmin
@@ -329,7 +329,7 @@ def _prefetch(request: pytest.FixtureRequest, exported: Exported, tool_runs: Too
 
 
 # --------------------------------------------------------------------------- #
-@pytest.mark.skipif(CC is None, reason="no C compiler on this machine")
+@pytest.mark.skipif(CC is None, reason=SKIP_NO_CC)
 class TestCExport:
     @pytest.mark.parametrize("bands", [1, 3, 7])
     def test_double_matches_runtime(self, sky: SkySH, exported: Exported, tool_runs: ToolRuns, bands: int) -> None:
@@ -359,7 +359,7 @@ class TestCExport:
         assert dc_relative_error(got, runtime_values(sky, edges, 2)) < DOUBLE_TOLERANCE
 
 
-@pytest.mark.skipif(CC is None, reason="no C compiler on this machine")
+@pytest.mark.skipif(CC is None, reason=SKIP_NO_CC)
 class TestCHeader:
     """Issue 13: the C export is a header; the azimuth is reduced as the runtime does."""
 
@@ -387,7 +387,7 @@ class TestCHeader:
         assert dc_relative_error(got, runtime_values(sky, pts, 7)) < AZIMUTH_TOLERANCE
 
 
-@pytest.mark.skipif(CC is None, reason="no C compiler on this machine")
+@pytest.mark.skipif(CC is None, reason=SKIP_NO_CC)
 class TestCDering:
     """The 3-band deringing step (skysh.export_dering) against the runtime's dering, window for window."""
 
@@ -483,12 +483,12 @@ def relative_minimum(coeffs: np.ndarray) -> np.ndarray:
 def builds(exported: Exported, tool_runs: ToolRuns) -> dict[str, Path]:
     """The headers of the table tests, compiled once: 3 bands (double, float), 7 bands (no table)."""
     if CC is None:
-        pytest.skip("no C compiler on this machine")
+        pytest.skip(SKIP_NO_CC)
     return {name: compile_harness(exported("c", bands=bands, real=real), tool_runs)
             for name, bands, real in (("3", 3, "double"), ("3f", 3, "float"), ("7", 7, "double"))}
 
 
-@pytest.mark.skipif(CC is None, reason="no C compiler on this machine")
+@pytest.mark.skipif(CC is None, reason=SKIP_NO_CC)
 class TestCIrradianceTable:
     @pytest.mark.parametrize(("name", "bands", "tolerance"), [("3", 3, DOUBLE_TOLERANCE), ("3f", 3, FLOAT32_TOLERANCE),
                                                               ("7", 7, DOUBLE_TOLERANCE)])
@@ -598,7 +598,7 @@ def run_engine_c(source: str, runs: ToolRuns, pts: list) -> tuple[np.ndarray, np
     return rows[:, 0], rows[:, 1:]
 
 
-@pytest.mark.skipif(CC is None, reason="no C compiler on this machine")
+@pytest.mark.skipif(CC is None, reason=SKIP_NO_CC)
 class TestCEngineExport:
     @pytest.mark.parametrize(("name", "bands"), engine_cases())
     def test_matches_convert(self, sky: SkySH, exported: Exported, tool_runs: ToolRuns, name: str, bands: int) -> None:
@@ -724,14 +724,14 @@ class TestShaderExport:
     def test_float32_tables(self, sky: SkySH, exported: Exported, bands: int) -> None:
         assert shader_float32_table_error(sky, exported("glsl", bands=bands), bands) < FLOAT32_TABLE_TOLERANCE
 
-    @pytest.mark.skipif(GLSLANG is None, reason="glslangValidator not installed (Debian: glslang-tools)")
+    @pytest.mark.skipif(GLSLANG is None, reason=SKIP_NO_GLSLANG)
     @pytest.mark.parametrize("version", GLSL_VERSIONS)
     @pytest.mark.parametrize("bands", SHADER_BANDS)
     def test_glsl_compiles(self, exported: Exported, tool_runs: ToolRuns, bands: int, version: str) -> None:
         result = tool_runs.run(*glslang_job(sky_shader(exported("glsl", bands=bands), version), "glsl")).result
         assert result.returncode == 0, result.stdout + result.stderr
 
-    @pytest.mark.skipif(GLSLANG is None, reason="glslangValidator not installed (Debian: glslang-tools)")
+    @pytest.mark.skipif(GLSLANG is None, reason=SKIP_NO_GLSLANG)
     @pytest.mark.parametrize("bands", SHADER_BANDS)
     def test_hlsl_compiles(self, exported: Exported, tool_runs: ToolRuns, bands: int) -> None:
         result = tool_runs.run(*glslang_job(sky_shader(exported("hlsl", bands=bands), "hlsl"), "hlsl")).result
@@ -785,7 +785,7 @@ class TestShaderIrradianceTable:
                         zip(rng.uniform(0.0, math.pi / 2.0, 1000), rng.uniform(2.5, 6.0, 1000), rng.uniform(-3.0, 3.0, 1000))])
         assert relative_minimum(got).min() >= 0.0
 
-    @pytest.mark.skipif(GLSLANG is None, reason="glslangValidator not installed (Debian: glslang-tools)")
+    @pytest.mark.skipif(GLSLANG is None, reason=SKIP_NO_GLSLANG)
     @pytest.mark.parametrize("version", CHOICE_VERSIONS)
     @pytest.mark.parametrize("engine", CHOICE_ENGINES)
     def test_compiles_with_every_choice(self, exported: Exported, tool_runs: ToolRuns, version: str, engine: str | None) -> None:

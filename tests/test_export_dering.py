@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from background import GLSLANG, RUN_DIR, ToolJob, ToolRuns
-from conftest import L_OF, light, random_functions, sky_samples
+from conftest import L_OF, SKIP_NO_CC, SKIP_NO_GLSLANG, SKIP_NO_NODE, light, random_functions, sky_samples
 
 from skysh import dering, export_dering, sh
 
@@ -141,7 +141,7 @@ def c_job(source: str, name: str, flags: tuple[str, ...] = ()) -> ToolJob:
 def compile_c(source: str, runs: ToolRuns, name: str, flags: tuple[str, ...] = ()) -> Path:
     """The program ``name`` built from ``source`` (once per session); skips without gcc."""
     if GCC is None:
-        pytest.skip("gcc is not installed")
+        pytest.skip(SKIP_NO_CC)
     done = runs.run(*c_job(source, name, flags))
     assert done.result.returncode == 0, done.result.stderr
     return done.directory / name
@@ -230,7 +230,7 @@ class TestDouble:
 
     def test_js_matches_python(self, data: np.ndarray, tmp_path: Path) -> None:
         if shutil.which("node") is None:
-            pytest.skip("node is not installed")
+            pytest.skip(SKIP_NO_NODE)
         script = tmp_path / "dering.js"
         script.write_text(JS_MAIN % export_dering.dering_source("js"))
         res = run(["node", str(script)], data)
@@ -258,7 +258,7 @@ class TestFloat:
     @pytest.mark.parametrize("language", ["glsl", "hlsl"])
     def test_shader_compiles(self, language: str, tool_runs: ToolRuns) -> None:
         if GLSLANG is None:
-            pytest.skip("glslangValidator is not installed (Debian: glslang-tools)")
+            pytest.skip(SKIP_NO_GLSLANG)
         done = tool_runs.run(*shader_job(language)).result
         assert done.returncode == 0, done.stdout + done.stderr
 

@@ -40,14 +40,14 @@ from typing import IO, Any
 import numpy as np
 import pytest
 from background import selected_names
-from conftest import PLAIN_DIP, dc_relative_error, engine_cases, is_padded_identity
+from conftest import PLAIN_DIP, SKIP_NO_NODE, SKIP_NO_TSC, dc_relative_error, engine_cases, is_padded_identity
 
 from skysh import SkySH, sh, shmin
 from skysh.export import export_source
 from skysh.export_js import declarations, declarations_path, module_source
 
 NODE: str | None = shutil.which("node")
-pytestmark = pytest.mark.skipif(NODE is None, reason="node is not installed")
+pytestmark = pytest.mark.skipif(NODE is None, reason=SKIP_NO_NODE)
 
 JS_TOLERANCE: float = 1e-12
 """The issue's requirement: double arithmetic in both languages, the same algorithm
@@ -616,7 +616,8 @@ def engine_error(sky: SkySH, node: NodeServer, module_dir: Path, name: str, band
 
 class TestEngines:
     @pytest.fixture(scope="class")
-    def engines(self) -> Any:
+    @classmethod
+    def engines(cls) -> Any:
         return pytest.importorskip("skysh.engines")
 
     @pytest.mark.parametrize(("name", "bands"), engine_cases())
@@ -698,6 +699,15 @@ def light_error(sky: SkySH, calls: list, results: list) -> float:
 class TestLights:
     def test_random_inputs_match_the_python_runtime(self, sky: SkySH, module_dir: Path, node: NodeServer) -> None:
         calls = light_calls(LIGHT_INPUTS)
+        assert light_error(sky, calls, node.run(module_dir, [list(c) for c in calls])["results"]) < JS_TOLERANCE
+
+    def test_large_azimuths_with_the_sun_match_the_python_runtime(self, sky: SkySH, module_dir: Path,
+                                                                   node: NodeServer) -> None:
+        """Issue 23: the sun sits where the sky turns at any finite azimuth (both reduce it by sunAzimuth % 2 pi,
+        exact as Python's math.fmod)."""
+        rng = np.random.default_rng(SEED + 23)
+        calls = [(ts, t, float(10.0 ** rng.uniform(4, 300) * rng.choice([-1.0, 1.0])), {**options, "sun": True})
+                 for ts, t, _, options in light_calls(60)]
         assert light_error(sky, calls, node.run(module_dir, [list(c) for c in calls])["results"]) < JS_TOLERANCE
 
     def test_sun_light_matches_the_runtime(self, sky: SkySH, module_dir: Path, node: NodeServer) -> None:
@@ -791,7 +801,7 @@ class TestModuleText:
         """The usage type-checks and its negative control (a wrong option type) does not: one tsc run of both files,
         every error located in bad.ts (none in usage.ts or the declarations, none unlocated), at least one there."""
         if type_check is None:
-            pytest.skip("typescript (tsc) is not installed; the declarations are checked structurally")
+            pytest.skip(SKIP_NO_TSC)
         out, err = type_check.communicate(timeout=TSC_TIMEOUT_S)
         text = out + err
         located = [Path(name).name for name in re.findall(r"^(\S+?)\(\d+,\d+\): error TS\d+", text, re.MULTILINE)]

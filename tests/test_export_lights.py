@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 import pytest
 from background import GLSLANG, RUN_DIR, ToolJob, ToolRuns, glslang_job, selected_names
-from conftest import PLAIN_DIP, Exported, dc_relative_error
+from conftest import PLAIN_DIP, SKIP_NO_CC, SKIP_NO_GLSLANG, Exported, dc_relative_error
 
 from skysh import SkySH, preetham, sh, shmin
 from skysh.export import export_source, export_tables
@@ -160,7 +160,7 @@ def table_of(p: Point) -> int:
 @pytest.fixture(scope="module")
 def binaries(exported: Exported, tool_runs: ToolRuns) -> dict[str, Path]:
     if CC is None:
-        pytest.skip("no C compiler on this machine")
+        pytest.skip(SKIP_NO_CC)
     return {name: compile_harness(exported("c", bands=bands, real=real), tool_runs) for name, (bands, real) in BUILDS.items()}
 
 
@@ -394,7 +394,7 @@ class TestShaders:
             np.testing.assert_array_equal(parse_table(source, name), np.ravel(values).astype(np.float32), err_msg=name)
         assert "skysh_sun_light(" in source and "#define SKYSH_LIGHTS 3" in source
 
-    @pytest.mark.skipif(GLSLANG is None, reason="glslangValidator not installed (Debian: glslang-tools)")
+    @pytest.mark.skipif(GLSLANG is None, reason=SKIP_NO_GLSLANG)
     @pytest.mark.parametrize("version", SHADER_VERSIONS)
     @pytest.mark.parametrize("bands", SHADER_BANDS)
     def test_compiles_with_the_sun_and_the_ground(self, exported: Exported, tool_runs: ToolRuns, version: str,
@@ -488,7 +488,7 @@ class TestGenerator:
         assert embed_table("glsl", "T", [0.1]) == f"const float T[1] = float[1](\n    {float32_literal(0.1)}\n);\n"
         assert embed_table("js", "T", [[1.0, 2.0]]).startswith("const T = new Float64Array([\n    1.0, 2.0\n")
 
-    @pytest.mark.skipif(CC is None, reason="no C compiler on this machine")
+    @pytest.mark.skipif(CC is None, reason=SKIP_NO_CC)
     def test_without_the_sun_table_the_sun_is_refused(self, sunless: tuple[SkySH, str], tool_runs: ToolRuns) -> None:
         """An in-memory SkyTable without the sun table exports; the sun is refused (-4), the ground still works."""
         reduced, source = sunless
@@ -498,7 +498,7 @@ class TestGenerator:
         assert refused[0] == -4 and refused[1] == -4 and np.all(refused[2:] == 0.0)
         assert ground[0] == 0 and dc_relative_error(ground[8:].reshape(-1, 3), reference(reduced, pts[1], 3)) < DOUBLE_TOLERANCE
 
-    @pytest.mark.skipif(CC is None, reason="no C compiler on this machine")
+    @pytest.mark.skipif(CC is None, reason=SKIP_NO_CC)
     def test_without_the_irradiance_table(self, sky: SkySH, bare: tuple[SkySH, str], tool_runs: ToolRuns) -> None:
         """An in-memory SkyTable without the irradiance table exports: by intent the old pipeline (as the runtime's
         default then), irradiance_table 1 refused (-5) as the runtime refuses it."""

@@ -674,7 +674,8 @@ class TestQuietWithoutMatplotlib:
     """A plain install has colour-science without matplotlib; skysh hides colour's warning about it."""
 
     @pytest.fixture(scope="class")
-    def runs(self, quiet_runs: Prefetched[subprocess.CompletedProcess]) -> dict[str, subprocess.CompletedProcess]:
+    @classmethod
+    def runs(cls, quiet_runs: Prefetched[subprocess.CompletedProcess]) -> dict[str, subprocess.CompletedProcess]:
         return {name: quiet_runs.result(name) for name in WITHOUT_MATPLOTLIB}
 
     def test_sky_sh_is_quiet(self, runs: dict[str, subprocess.CompletedProcess]) -> None:

@@ -104,7 +104,8 @@ def listing1_decompress(words: list[int], dc: float, bits: int, nzb: float, sq: 
 # --------------------------------------------------------------------------- #
 class TestBounds:
     @pytest.fixture(scope="class")
-    def table2(self):
+    @classmethod
+    def table2(cls):
         dirs = fibonacci_sphere(DENSE_POINTS)
         y = sh.basis(dirs, 3)
         return dirs, y[:, 1:] / y[:, :1]  # (N, 8): Y_k / Y_00
@@ -358,7 +359,8 @@ class TestCodec:
 # --------------------------------------------------------------------------- #
 class TestTable3:
     @pytest.fixture(scope="class")
-    def probes(self):
+    @classmethod
+    def probes(cls):
         rng = np.random.default_rng(11)
         dirs = unit(rng.normal(size=(64, 3, 3)))
         weights = rng.random((64, 3, 3))

@@ -174,7 +174,8 @@ class TestSyntheticTable:
     """The runtime evaluates exactly the polynomial the file describes."""
 
     @pytest.fixture(scope="class")
-    def synthetic(self) -> tuple[SkySH, dict]:
+    @classmethod
+    def synthetic(cls) -> tuple[SkySH, dict]:
         table, polys = _synthetic()
         return SkySH(table), polys
 
@@ -629,7 +630,8 @@ class TestColourspace:
     """
 
     @pytest.fixture(scope="class")
-    def matrices(self) -> dict[str, np.ndarray]:
+    @classmethod
+    def matrices(cls) -> dict[str, np.ndarray]:
         import colour
 
         srgb, wide = colour.RGB_COLOURSPACES["sRGB"], colour.RGB_COLOURSPACES["ITU-R BT.2020"]

@@ -94,13 +94,15 @@ class TestExactIrradiance:
     SUN_AZIMUTH = 0.7
 
     @pytest.fixture(scope="class")
-    def normals(self):
+    @classmethod
+    def normals(cls):
         return np.vstack([random_unit_vectors(4, 16), [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0], unit([1.0, 0.0, 0.05])]])
 
     @pytest.fixture(scope="class")
-    def lune(self, normals):
+    @classmethod
+    def lune(cls, normals):
         both = np.vstack([normals, -normals])
-        return both, np.stack([lune_irradiance(n, self.SUN_ZENITH, self.TURBIDITY, self.SUN_AZIMUTH) for n in both])
+        return both, np.stack([lune_irradiance(n, cls.SUN_ZENITH, cls.TURBIDITY, cls.SUN_AZIMUTH) for n in both])
 
     def test_against_direct_quadrature(self, lune):
         normals, direct = lune
