@@ -146,11 +146,19 @@ SERVER_START_TIMEOUT_S: float = 180.0
 machine), and of each step after it."""
 
 
+def _interruptible() -> None:
+    """In the server's child before it starts: SIGINT back to its default, so Python turns it into Ctrl-C's
+    KeyboardInterrupt even when the test run was started where SIGINT is ignored (a background job of a
+    non-interactive shell inherits SIG_IGN, and Python then installs no handler)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def server_session(argv: list[str], cwd: Path) -> dict[str, Any]:
     """Run a server command (``python -m skysh view``, ``serve()``) in ``cwd``: the first line it prints, one GET of
     the loopback address in it (status and body), then Ctrl-C (SIGINT): its exit status, stdout and stderr. None
     (b"" for the body) where a step was not reached."""
-    process = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=cwd)
+    process = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=cwd,
+                               preexec_fn=_interruptible if os.name == "posix" else None)
     timer = threading.Timer(SERVER_START_TIMEOUT_S, process.kill)
     timer.start()
     session: dict[str, Any] = {"line": "", "status": None, "body": b"", "code": None, "out": None, "err": None}
