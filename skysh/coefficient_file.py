@@ -42,7 +42,7 @@ content has exactly one file:
     grouped as ``zonal_half_layout(groups)``; what the numbers mean is the
     table's metadata block. Both required: ``sun``, one group, one row, ln X,
     ln Y, ln Z of the sun's direct normal illuminance in lux
-    (:data:`skysh.sunlight.SUN_BASIS`; :mod:`skysh.sunlight` evaluates it);
+    (:mod:`skysh.sun_table`; :mod:`skysh.sunlight` evaluates it);
     ``irradiance``, three groups (bands), six rows, the sky's form of the
     constrained 3-band irradiance (:data:`IRRADIANCE_BASIS`), its block recording
     the objective and the non-negativity certificate (:attr:`TableSpec.recorded`).
@@ -93,13 +93,7 @@ from skysh import _npz, files, poly
 from skysh._checks import check_count
 from skysh._npz import CoefficientFileError
 from skysh._version import __version__
-from skysh.sunlight import (
-    SUN_AIR_MASS_RANGE,
-    SUN_BASIS,
-    SUN_MAX_LN,
-    SUN_UNITS,
-    SUN_VARIABLES,
-)
+from skysh.sun_table import SUN_AIR_MASS_RANGE, SUN_BASIS, SUN_MAX_LN, SUN_UNITS, SUN_VARIABLES
 
 __all__ = [
     "FORMAT", "FORMAT_VERSION", "RETIRED_VERSIONS", "DEFAULT_FILE_NAME", "MAX_FILE_BANDS", "MAX_FILE_DEGREE",

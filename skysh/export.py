@@ -8,8 +8,9 @@ function, like the C arrays the Habel seed published, ready to paste.
 
 -   :func:`export_source`: the text for one language (:data:`EXPORT_FORMATS`);
     ``engine=`` makes the generated function return an engine's numbers
-    (:mod:`skysh.engines`). ``"js"`` and ``"json"`` are written by :mod:`skysh.export_js`.
--   :func:`export_tables`: the numbers every export is generated from.
+    (:mod:`skysh.engines`). C, GLSL and HLSL are written here, ``"js"`` and ``"json"``
+    by :mod:`skysh.export_js`; both from the numbers of :mod:`skysh.export_tables`
+    (:func:`~skysh.export_tables.export_tables`, :func:`~skysh.export_tables.engine_plan`).
 -   :func:`double_literal`, :func:`float32_literal`: shortest round-trip
     number text for the generated code (from :mod:`skysh.export_lights`).
 -   :data:`EXPORT_FORMATS`, :data:`C_REAL_TYPES`, :data:`DEFAULT_FILE_NAMES`.
@@ -51,7 +52,7 @@ from :mod:`skysh.preetham`, never retyped):
     Lambertian ground lit by the unfiltered sky's c_10 and the sun.
 8.  A per-band factor, which commutes with the rotation (one multiplication
     with step 5 when steps 6 and 7 are off): ``A_l`` for irradiance, or an
-    engine's folded factor (:func:`skysh.export_js.engine_plan`).
+    engine's folded factor (:func:`skysh.export_tables.engine_plan`).
 9.  Engines only: the rest of the engine's linear map (frame change, signs,
     per-coefficient constants, packing) written out term by term, plus its
     constant offset.
@@ -81,41 +82,34 @@ References
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
-from dataclasses import dataclass
 from string import Template
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from skysh import coefficient_file, poly, runtime, sh
-from skysh._checks import check_bands, check_choice, interval_text
+from skysh import export_js, runtime
+from skysh._checks import check_choice, interval_text
 from skysh._version import __version__
 from skysh.export_lights import (
     FLOAT32_MAX,
     ZENITH_CONSTANTS,
-    LightTables,
     c_like_engine,
     c_like_lights,
-    chebyshev_terms,
     dering_parts,
     double_literal,
     float32_literal,
     irradiance_parts,
-    light_tables,
     real_literal,
     text_rows,
 )
+from skysh.export_tables import EnginePlan, ExportTables, engine_plan, export_tables
 from skysh.preetham import PEREZ_Y
 
-if TYPE_CHECKING:
-    from skysh.export_js import EnginePlan
-
 __all__ = [
-    "EXPORT_FORMATS", "C_REAL_TYPES", "DEFAULT_FILE_NAMES", "ExportTables", "export_tables", "export_source",
-    "double_literal", "float32_literal", "FLOAT32_MAX",
+    "EXPORT_FORMATS", "C_REAL_TYPES", "DEFAULT_FILE_NAMES", "export_source", "double_literal", "float32_literal",
+    "FLOAT32_MAX",
 ]
 
 EXPORT_FORMATS: tuple[str, ...] = ("c", "glsl", "hlsl", "json", "js")
@@ -131,71 +125,6 @@ DEFAULT_FILE_NAMES: dict[str, str] = {
 
 _TRIPLES_PER_LINE: int = 4
 """RGB triples per line in the generated tables."""
-
-
-@dataclass(frozen=True)
-class ExportTables:
-    """
-    Everything an export is generated from, for one band count.
-
-    Attributes: ``bands`` N (l = 0 .. N - 1); ``degrees`` (DX, DY), the Chebyshev degrees
-    in x (sun zenith) and y (log turbidity); ``table`` (DX + 1, DY + 1, N (N + 1) / 2, 3),
-    the Chebyshev coefficients (no Gibbs filter) of the stored (m >= 0) SH coefficients
-    over the luminance scale (dimensionless), third axis ``half_layout`` (l, m); ``gibbs``
-    (N,) sinc(pi l / N); ``lobe`` (N,) A_l; ``x_scale, x_shift, y_scale, y_shift`` the
-    variables' affine maps (module docstring, step 2); the fitted domain (radians, turbidity);
-    ``lights`` the sun's and the ground's numbers (:func:`skysh.export_lights.light_tables`);
-    ``irradiance`` (DX + 1, DY + 1, 6, 3) the certified irradiance table's rows (E_lm / A_l over
-    the luminance scale, 3 bands, m >= 0) or None (fewer than 3 bands, or a file without it).
-    (DX, DY) are the largest of the N bands' and the irradiance table's, zeros above a table's own.
-    """
-
-    bands: int
-    degrees: tuple[int, int]
-    table: NDArray[np.float64]
-    half_layout: list[tuple[int, int]]
-    gibbs: NDArray[np.float64]
-    lobe: NDArray[np.float64]
-    x_scale: float
-    x_shift: float
-    y_scale: float
-    y_shift: float
-    sun_zenith_domain: tuple[float, float]
-    turbidity_domain: tuple[float, float]
-    lights: LightTables
-    irradiance: NDArray[np.float64] | None
-
-
-def export_tables(sky: runtime.SkySH, bands: int = 3) -> ExportTables:
-    """
-    The numbers of an export: the file's sky table as the runtime's plan for (``bands``, no Gibbs)
-    reads it (the largest degrees of bands 0 .. N - 1, the m >= 0 rows), the irradiance table
-    (3 bands or more) and the variables' maps.
-
-    Parameters
-    ----------
-    sky
-        A loaded :class:`skysh.SkySH` (read through its public ``table``).
-    bands
-        N in [1, the file's bands].
-    """
-    if not isinstance(sky, runtime.SkySH):
-        raise ValueError(f"sky must be a loaded skysh.SkySH (SkySH.load()), got {type(sky).__name__}")
-    bands = check_bands(bands, high=sky.bands)
-    named = sky.table.tables.get("irradiance") if sky.has_irradiance_table and bands >= 3 else None
-    own = sky.table.degrees[:bands] if named is None else np.concatenate([sky.table.degrees[:bands], named.degrees])
-    dx, dy = (int(d) for d in own.max(axis=0))
-    layout = coefficient_file.zonal_half_layout(bands)
-    table = chebyshev_terms(sky.table.table[:, : len(layout)], sky.table.max_degrees, (dx, dy))
-    irradiance = None if named is None else chebyshev_terms(named.table, named.max_degrees, (dx, dy))
-    (z0, z1), (t0, t1) = poly.SUN_ZENITH_DOMAIN, poly.TURBIDITY_DOMAIN
-    l0, l1 = math.log(t0), math.log(t1)
-    return ExportTables(
-        bands=bands, degrees=(dx, dy), table=table, half_layout=layout, gibbs=runtime.gibbs_factors(bands),
-        lobe=sh.cosine_lobe(bands), x_scale=2.0 / (z1 - z0), x_shift=(z0 + z1) / (z1 - z0), y_scale=2.0 / (l1 - l0),
-        y_shift=(l0 + l1) / (l1 - l0), sun_zenith_domain=(z0, z1), turbidity_domain=(t0, t1),
-        lights=light_tables(sky, bands, (dx, dy)), irradiance=irradiance,
-    )
 
 
 # Templates: $-placeholders (string.Template), so the languages' braces stay literal.
@@ -622,7 +551,7 @@ def export_source(
     engine
         None, or one of :data:`skysh.engines.ENGINES`: C, GLSL and HLSL gain
         ``skysh_engine_coefficients()`` returning that engine's numbers
-        (:class:`skysh.export_js.EnginePlan`), JSON the plan. Refused for ``"js"``,
+        (:class:`skysh.export_tables.EnginePlan`), JSON the plan. Refused for ``"js"``,
         whose ``coefficients()`` takes every engine as an option.
 
     Returns
@@ -640,19 +569,11 @@ def export_source(
     if language == "js":
         if engine is not None:
             raise ValueError("engine must be None for the js export (its coefficients() takes an engine option)")
-        from skysh import export_js
-
         return export_js.module_source(sky, bands)
     tables = export_tables(sky, 3 if bands is None else bands)
-    plan = None
-    if engine is not None:
-        from skysh.export_js import engine_plan
-
-        plan = engine_plan(engine, tables.bands)
+    plan = None if engine is None else engine_plan(engine, tables.bands)
     if language == "c":
         return _c_source(tables, real, plan)
     if language == "json":
-        from skysh.export_js import json_source
-
-        return json_source(tables, plan)
+        return export_js.json_source(tables, plan)
     return _shader_source(tables, language, plan)

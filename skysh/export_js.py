@@ -1,6 +1,6 @@
 """
-The JavaScript and JSON exports, and the engine plans every export shares
-========================================================================
+The JavaScript and JSON exports
+===============================
 
 -   :func:`module_source`: a self-contained ES module (no dependencies, double
     precision) with the fitted tables and ``coefficients(sunZenith, turbidity,
@@ -9,9 +9,9 @@ The JavaScript and JSON exports, and the engine plans every export shares
 -   :func:`declarations`, :func:`declarations_path`: the TypeScript declarations of that
     module and the file name TypeScript finds them under (``sky_sh.d.mts`` beside ``sky_sh.mjs``).
 -   :func:`json_source`: the tables and the algorithm in words, for any other language.
--   :func:`engine_plan`, :class:`EnginePlan`: an engine's linear conversion
-    (:func:`skysh.engines.engine_map`) split at the Z rotation (per-band factors
-    folded before it, the rest after it), for every export.
+
+Both are written from :func:`skysh.export_tables.export_tables` and, for the engines,
+:func:`skysh.export_tables.engine_plan` (the numbers every export shares).
 
 The module computes what :mod:`skysh.export` documents step by step (the
 runtime's algorithm, Habel 2008 eqs. 1, 4, 5) with everything static prepared
@@ -40,9 +40,6 @@ from __future__ import annotations
 
 import json
 import textwrap
-from collections import Counter
-from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 from string import Template
 from typing import Any
@@ -50,142 +47,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from skysh import runtime, sh
+from skysh import runtime
 from skysh._checks import interval_text
 from skysh._version import __version__
-from skysh.export import ExportTables, export_tables
 from skysh.export_js_parts import DECLARATIONS, irradiance_json, js_dering, js_irradiance, js_lights, lights_json
 from skysh.export_lights import ZENITH_CONSTANTS, double_literal, text_rows
+from skysh.export_tables import EnginePlan, ExportTables, engine_plan, export_tables
 from skysh.preetham import PEREZ_Y
 
-__all__ = ["ENGINE_ZERO", "ENGINE_UNIT", "EnginePlan", "engine_plan", "module_source", "declarations", "declarations_path",
-           "json_source"]
-
-ENGINE_ZERO: float = 1e-13
-"""Entries of an engine map smaller than this times its largest entry are rounding
-residue of the engine's rotation matrices (exact zeros in closed form) and are
-dropped; the change to an output is below 1e-13 of the largest term."""
-
-ENGINE_UNIT: float = 1e-14
-"""Entries within this of +-1 once the per-band factor is divided out are +-1 in closed form
-(the engines' maps are signs, axis permutations, exact 90-degree rotations and band
-constants, built numerically): they are written as additions, changing an output by
-at most this relative amount."""
-
-
-
-@dataclass(frozen=True)
-class EnginePlan:
-    """
-    An engine's conversion (:func:`skysh.engines.engine_map`) arranged for the exports.
-
-    ``engine_flat = matrix @ (band_factor[l] * radiance_flat) + offset``, where
-    ``radiance_flat`` is the skysh radiance coefficients (N * N, 3) flattened
-    coefficient-major (index 3 i + channel) and l the band of each column.
-
-    Attributes
-    ----------
-    engine, bands
-        The engine's name and N.
-    band_factor
-        (N,) per-band factors folded before the Z rotation (they commute with it):
-        for each band the most common magnitude of its entries in the engine's
-        map (for example A_l / pi times a basis constant), so that the most
-        entries of ``matrix`` are +-1 (written as additions).
-    matrix
-        (P, N * N * 3): the rest of the map (frame change, signs, per-coefficient
-        constants, packing), applied after the rotation; entries below
-        :data:`ENGINE_ZERO` of the largest are exact zeros.
-    offset
-        (P,) constant terms of the engine's layout (for example a packed 1).
-    shape, labels
-        The engine's own array shape (row-major, product P) and the labels of its rows (first axis).
-    """
-
-    engine: str
-    bands: int
-    band_factor: NDArray[np.float64]
-    matrix: NDArray[np.float64]
-    offset: NDArray[np.float64]
-    shape: tuple[int, ...]
-    labels: tuple[str, ...]
-
-    def terms(self, row: int) -> list[tuple[int, float]]:
-        """The nonzero (column, value) pairs of ``matrix[row]``, columns ascending."""
-        (columns,) = np.nonzero(self.matrix[row])
-        return [(int(q), float(self.matrix[row, q])) for q in columns]
-
-    def expression(self, row: int, value: Callable[[int], str], literal: Callable[[float], str]) -> str:
-        """
-        ``matrix[row] . v + offset[row]`` as source text: ``value(q)`` names v[q], ``literal`` writes a number.
-
-        Coefficients +-1 become a bare addition or subtraction; zero terms are left out.
-        """
-        text = ""
-        for q, v in self.terms(row):
-            term = value(q) if abs(v) == 1.0 else f"{literal(abs(v))} * {value(q)}"
-            text = f"{text} {'-' if v < 0.0 else '+'} {term}" if text else ("-" if v < 0.0 else "") + term
-        bias = float(self.offset[row])
-        if bias != 0.0:
-            text = f"{text} {'-' if bias < 0.0 else '+'} {literal(abs(bias))}" if text else literal(bias)
-        return text or literal(0.0)
-
-
-def _most_common_magnitude(values: NDArray[np.float64]) -> float:
-    """The magnitude shared by the most entries (12 significant digits decide equality), or 1 for none."""
-    magnitudes = np.abs(values[values != 0.0])
-    if magnitudes.size == 0:
-        return 1.0
-    keys = [f"{v:.11e}" for v in magnitudes]
-    best, _ = Counter(keys).most_common(1)[0]  # ties: the first met, column order (deterministic)
-    return float(magnitudes[keys.index(best)])
-
-
-def engine_plan(engine: str, bands: int) -> EnginePlan:
-    """
-    An engine's conversion for ``bands`` bands, split at the Z rotation (see :class:`EnginePlan`).
-
-    Parameters
-    ----------
-    engine
-        One of :data:`skysh.engines.ENGINES`.
-    bands
-        N in [1, the engine's limit :data:`skysh.engines.ENGINE_MAX_BANDS`].
-
-    Raises
-    ------
-    ValueError
-        From :func:`skysh.engines.engine_map`: unknown engine (the valid names
-        listed) or a band count the engine cannot take.
-    """
-    from skysh import (
-        engines,  # imported on first use: exports without an engine never need it
-    )
-
-    emap = engines.engine_map(engine, bands)
-    matrix = np.array(emap.matrix, dtype=np.float64)
-    offset = np.array(emap.offset, dtype=np.float64).reshape(-1)
-    n = int(emap.bands)
-    if matrix.shape != (offset.size, n * n * 3):
-        raise ValueError(f"engine_map({engine!r}, {bands}) has matrix {matrix.shape} and offset {offset.shape}")
-    largest = float(np.abs(matrix).max(initial=0.0))
-    matrix[np.abs(matrix) <= ENGINE_ZERO * largest] = 0.0
-    band_of_column = np.repeat([sh.lm(i)[0] for i in range(n * n)], 3)
-    factors = np.ones(n)
-    for l in range(n):
-        columns = band_of_column == l
-        factor = _most_common_magnitude(matrix[:, columns])
-        factors[l] = 1.0 if abs(factor - 1.0) <= ENGINE_UNIT else factor
-        matrix[:, columns] /= factors[l]
-    unit = np.abs(np.abs(matrix) - 1.0) <= ENGINE_UNIT
-    matrix[unit] = np.sign(matrix[unit])
-    for array in (factors, matrix, offset):
-        array.flags.writeable = False
-    return EnginePlan(
-        engine=str(emap.engine), bands=n, band_factor=factors, matrix=matrix, offset=offset,
-        shape=tuple(int(s) for s in emap.shape), labels=tuple(str(s) for s in emap.labels),
-    )
-
+__all__ = ["module_source", "declarations", "declarations_path", "json_source"]
 
 _HEADER: str = '''\
 /**
@@ -255,7 +125,7 @@ const LOBE = new Float64Array([$lobe]);
 const PEREZ_Y = new Float64Array([$perez]);
 
 // Engines: band = per-band factor folded before the rotation, apply = the rest of the
-// engine's linear map (skysh.export_js.engine_plan), from radiance r into o.
+// engine's linear map (skysh.export_tables.engine_plan), from radiance r into o.
 const ENGINE_PLANS = new Map([
 $engines
 ]);
@@ -601,7 +471,7 @@ def module_source(sky: runtime.SkySH, bands: int | None = None) -> str:
         grows with it (about 200 KB of text for 7 bands).
 
     Returns JavaScript source ending with a newline (its header documents the API); raises a
-    ValueError for ``bands`` out of range (see :func:`skysh.export.export_tables`).
+    ValueError for ``bands`` out of range (see :func:`skysh.export_tables.export_tables`).
     """
     tables = export_tables(sky, sky.bands if bands is None else bands)
     n = tables.bands

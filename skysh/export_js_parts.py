@@ -239,7 +239,7 @@ def js_irradiance(table: ArrayLike | None) -> str:
     ----------
     table
         (DX + 1, DY + 1, 6, 3): the table's rows at the module's degrees
-        (:attr:`skysh.export.ExportTables.irradiance`), or None (a module of fewer than 3
+        (:attr:`skysh.export_tables.ExportTables.irradiance`), or None (a module of fewer than 3
         bands or a file without it: ``irradianceTable: true`` is refused, "by intent" is the sky).
 
     Uses the module's ``flag``; ``IRRADIANCE[3 (r TERMS + i (DY + 1) + j) + c]`` as ``TABLE``.

@@ -17,8 +17,7 @@ every export shares (:mod:`skysh.export_js_parts` writes the JavaScript and JSON
     constants, read through public names only; :func:`light_flags`.
 -   :func:`chebyshev_terms`: a file table's Chebyshev terms at an export's degrees
     (the sky's, the irradiance table's, the c_10's).
--   :func:`embed_table`: one named constant table in C, GLSL, HLSL or
-    JavaScript (every table the lights add, and any later one).
+-   :func:`embed_table`: one named constant table in C, GLSL, HLSL or JavaScript (every table the lights add, and any later one).
 -   :func:`c_like_lights`: ``skysh_sun_rgb``, ``skysh_add_lights`` and
     ``skysh_sun_light`` for C, GLSL and HLSL from one template.
 -   :func:`dering_parts`: the 3-band deringing of :mod:`skysh.export_dering` wired
@@ -32,7 +31,7 @@ What the generated code computes (after the sky's rotation and its deringing)
 ------------------------------------------------------------------------------
 1.  The sun's RGB direct normal illuminance (lux): Kasten's air mass
     ``m = 1 / (cos ts + a (b - ts[deg])^-c)``, ``x = clamp(2 (m - m0) / (m1 - m0)
-    - 1)``, ``y = clamp(2 (T - 2.5) / 3.5 - 1)`` (:data:`skysh.sunlight.SUN_VARIABLES`),
+    - 1)``, ``y = clamp(2 (T - 2.5) / 3.5 - 1)`` (:data:`skysh.sun_table.SUN_VARIABLES`),
     ``ln XYZ = sum T_i(x) T_j(y) SUN[i][j]``, ``RGB = rgb_from_xyz @ exp(ln XYZ)``.
 2.  The ground (when its albedo is not black): ``L_g = albedo (E_sky + cos(ts) RGB_sun)
     / pi`` with ``E_sky = sqrt(4 pi / 3) c_10`` of the *unfiltered* sky
@@ -72,6 +71,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from skysh import coefficient_file, ground, lights, poly, preetham, solar, sunlight
 from skysh._checks import check_bands, check_choice, check_scalar
+from skysh.sun_table import SUN_AIR_MASS_COEFFICIENTS, SUN_AIR_MASS_RANGE
 
 __all__ = [
     "FLOAT32_MAX", "TABLE_LANGUAGES", "ZENITH_CONSTANTS", "BY_INTENT", "LightTables", "light_tables", "light_flags",
@@ -318,7 +318,7 @@ def irradiance_parts(language: str, table: ArrayLike | None, real: str = "double
         ``"c"``, ``"glsl"`` or ``"hlsl"``.
     table
         (DX + 1, DY + 1, 6, 3): the table's rows at the export's degrees
-        (:attr:`skysh.export.ExportTables.irradiance`), or None for an export without it
+        (:attr:`skysh.export_tables.ExportTables.irradiance`), or None for an export without it
         (``irradiance_table`` 1 is then refused and "by intent" is the sky's pipeline).
     real
         C only: ``"double"`` or ``"float"``.
@@ -356,14 +356,14 @@ def irradiance_parts(language: str, table: ArrayLike | None, real: str = "double
 
 
 # --------------------------------------------------------------------------- #
-# Step 9: the rest of an engine's map (skysh.export_js.engine_plan)
+# Step 9: the rest of an engine's map (skysh.export_tables.engine_plan)
 # --------------------------------------------------------------------------- #
 _ENGINE_TABLES: dict[str, str] = {"c": """
-/* Engine "$engine": per-band factors folded before the rotation (skysh.export_js.engine_plan). */
+/* Engine "$engine": per-band factors folded before the rotation (skysh.export_tables.engine_plan). */
 #define SKYSH_ENGINE_COUNT $count /* values, shape $shape */
 static const skysh_real SKYSH_ENGINE_BAND[SKYSH_BANDS] = { $band };
 """, "shader": """
-// Engine "$engine": per-band factors folded before the rotation (skysh.export_js.engine_plan).
+// Engine "$engine": per-band factors folded before the rotation (skysh.export_tables.engine_plan).
 #define SKYSH_ENGINE_COUNT $count // values, shape $shape
 $const float SKYSH_ENGINE_BAND[SKYSH_BANDS] = $band;
 """}
@@ -416,7 +416,7 @@ def c_like_engine(language: str, plan: Any, common: dict[str, Any], fmt: Any) ->
     """
     Step 9 in C, GLSL or HLSL: (the engine's tables, ``skysh_engine_coefficients``); empty without ``plan``.
 
-    ``plan``: an :class:`skysh.export_js.EnginePlan` or None; ``common``: the sky template's
+    ``plan``: an :class:`skysh.export_tables.EnginePlan` or None; ``common``: the sky template's
     substitutions; ``fmt``: the export's number literal (float32 text for the shaders).
     """
     check_choice(language, "language", ("c", "glsl", "hlsl"))
@@ -523,7 +523,7 @@ def light_tables(sky: Any, bands: int, degrees: tuple[int, int]) -> LightTables:
     c10 = np.zeros((dx + 1, dy + 1, 3))
     if has_ground:  # the sky's unfiltered (1, 0), at the export's terms
         c10 = chebyshev_terms(table.table[:, 1:2], table.max_degrees, degrees)[:, :, 0]
-    (a, b, c), (m0, m1) = sunlight.SUN_AIR_MASS_COEFFICIENTS, sunlight.SUN_AIR_MASS_RANGE
+    (a, b, c), (m0, m1) = SUN_AIR_MASS_COEFFICIENTS, SUN_AIR_MASS_RANGE
     t_low, t_high = poly.TURBIDITY_DOMAIN
     constants = {
         "am_a": a, "am_b": b, "am_neg_c": -c, "deg": 180.0 / math.pi, "m0": m0, "sx_scale": 2.0 / (m1 - m0),

@@ -20,7 +20,7 @@ squares, and measures the result on held-out points. Used by
 -   :func:`zenith_of_air_mass`, :func:`sun_grid`, :func:`sun_held_out_points`,
     :func:`fit_sun_table`, :func:`evaluate_sun_table`, :func:`sun_errors`,
     :func:`build_sun`: the sun's direct illuminance (:mod:`skysh.solar`) as the
-    file's sun table (:mod:`skysh.sunlight` evaluates it): ln XYZ in Chebyshev
+    file's sun table (:mod:`skysh.sun_table`; :mod:`skysh.sunlight` evaluates it): ln XYZ in Chebyshev
     polynomials of the air-mass variable x and the turbidity variable y.
 
 The sun's table is fitted by plain least squares of ln XYZ (equal weights,
@@ -56,9 +56,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from skysh import coefficient_file, poly, preetham, sh, sunlight
+from skysh import coefficient_file, poly, preetham, sh
 from skysh._checks import MAX_ARRAY_ELEMENTS, check_count, check_flag, check_seed
 from skysh.coefficient_file import NamedTable, SkyTable, zonal_half_layout
+from skysh.sun_table import SUN_AIR_MASS_RANGE, air_mass, sun_variables
 
 __all__ = [
     "LMIN_FLOOR",
@@ -546,7 +547,7 @@ SUN_ERROR_DEFINITION: str = (
 
 def zenith_of_air_mass(m: NDArray) -> NDArray[np.float64]:
     """
-    Sun zeniths (radians) whose Kasten air mass (:func:`skysh.sunlight.air_mass`) is ``m``, in [m0, m1].
+    Sun zeniths (radians) whose Kasten air mass (:func:`skysh.sun_table.air_mass`) is ``m``, in [m0, m1].
 
     Bisection on [0, pi/2] to float precision (64 halvings of pi/2 reach 8.5e-20).
     Kasten's m dips slightly (< 1e-7) below m0 just above the zenith; for m in
@@ -556,14 +557,14 @@ def zenith_of_air_mass(m: NDArray) -> NDArray[np.float64]:
     lo, hi = np.zeros_like(m), np.full_like(m, poly.SUN_ZENITH_DOMAIN[1])
     for _ in range(64):
         mid = 0.5 * (lo + hi)
-        below = sunlight.air_mass(mid) < m
+        below = air_mass(mid) < m
         lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
     return 0.5 * (lo + hi)
 
 
 def _from_variables(x: NDArray, y: NDArray) -> tuple[NDArray, NDArray]:
     """(sun zenith, turbidity) of the sun table's variables x, y in [-1, 1]."""
-    m0, m1 = sunlight.SUN_AIR_MASS_RANGE
+    m0, m1 = SUN_AIR_MASS_RANGE
     (t0, t1) = poly.TURBIDITY_DOMAIN
     return zenith_of_air_mass(m0 + 0.5 * (x + 1.0) * (m1 - m0)), t0 + 0.5 * (y + 1.0) * (t1 - t0)
 
@@ -592,7 +593,7 @@ def sun_held_out_points(count: int, seed: int) -> tuple[NDArray, NDArray]:
 
 def _sun_design(sun_zenith: NDArray, turbidity: NDArray, degrees: tuple[int, int]) -> NDArray:
     """(P, (d_x + 1)(d_y + 1)) products T_i(x) T_j(y) of the sun table's variables, term i (d_y + 1) + j."""
-    x, y = sunlight.sun_variables(sun_zenith, turbidity)
+    x, y = sun_variables(sun_zenith, turbidity)
     tx, ty = poly.chebyshev(x, degrees[0]), poly.chebyshev(y, degrees[1])
     return (tx[:, :, None] * ty[:, None, :]).reshape(x.shape[0], -1)
 
@@ -614,7 +615,7 @@ def fit_sun_table(sun_zenith: NDArray, turbidity: NDArray, xyz: NDArray, degrees
     -------
     table, condition
         ((d_x + 1)(d_y + 1), 1, 3) Chebyshev coefficients of ln XYZ
-        (:data:`skysh.sunlight.SUN_BASIS`), and the design's condition number.
+        (:data:`skysh.sun_table.SUN_BASIS`), and the design's condition number.
     """
     design = _sun_design(sun_zenith, turbidity, degrees)
     solution, _, _, singular = np.linalg.lstsq(design, np.log(xyz), rcond=None)

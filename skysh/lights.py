@@ -82,7 +82,7 @@ from skysh._checks import (
     short_repr,
 )
 from skysh.preetham import luminance_scale_unchecked
-from skysh.sunlight import SUN_AIR_MASS_COEFFICIENTS, SUN_AIR_MASS_RANGE
+from skysh.sun_table import SUN_AIR_MASS_COEFFICIENTS, SUN_AIR_MASS_RANGE
 
 __all__ = ["SUN_SH_CLAMP", "ALBEDO_RANGE", "check_albedo", "sun_trig_matrix", "ground_zonal", "LitPlan"]
 
@@ -241,7 +241,7 @@ class LitPlan:
     ``cos(angle_map @ (acos x, acos y, phi, 1, ts, acos x_s, acos y_s))``: the
     sky's Chebyshev terms T_i(x), T_j(y), the sun table's T_i(x_s), T_j(y_s)
     (x_s affine in Kasten's air mass, y_s in the turbidity:
-    :data:`skysh.sunlight.SUN_VARIABLES`), the sun's cos(k ts), sin(k ts) and the
+    :data:`skysh.sun_table.SUN_VARIABLES`), the sun's cos(k ts), sin(k ts) and the
     rotation factors cos(m phi), sin(m phi). Then two products: ``a = u @
     table_x`` with u = (T(x), T(x_s), trig(ts)) and a block table, read as a
     (D + 1, C) matrix; ``b = Y @ a`` with the (3, D + 1) weights Y = [[T(y), 0],
@@ -320,7 +320,7 @@ class LitPlan:
         b, read as (3, C): b[0] holds the sky's m >= 0 coefficients and its unfiltered c_10 over the luminance scale, b[1]
         the sun's ln XYZ, b[2] the (K_half, 2) matrix [sun's windowed Ybar(ts), ground's zonal factor]."""
         cos_ts = math.cos(ts)
-        m = 1.0 / (cos_ts + _A * (_B - ts * _DEG) ** _NEG_C)  # Kasten's air mass (skysh.sunlight)
+        m = 1.0 / (cos_ts + _A * (_B - ts * _DEG) ** _NEG_C)  # Kasten's air mass (skysh.sun_table)
         xs = (m - _M0) * _SX_SCALE - 1.0
         ys = (t - _TMIN) * _SY_SCALE - 1.0
         # Clamp what rounding (and Kasten's dip near the zenith) pushes past +-1 (x >= -1 holds exactly).

@@ -13,29 +13,16 @@ appendix), computed spectrally offline by :mod:`skysh.solar` and fitted by
     lux) and :meth:`SunLight.light` (the unit vector towards the sun and its
     RGB illuminance: a directional light), each for one frame (Python floats:
     the fast path) or a batch (arrays, broadcast).
--   :func:`air_mass`, :func:`sun_variables`: the table's variables (Kasten's
-    relative optical mass; the Chebyshev variables x, y), shared with the fit.
--   :data:`SUN_AIR_MASS_COEFFICIENTS`, :data:`SUN_AIR_MASS_RANGE`,
-    :data:`SUN_VARIABLES`, :data:`SUN_BASIS`, :data:`SUN_UNITS`,
-    :data:`SUN_MAX_LN`: the table's form, which
-    :mod:`skysh.coefficient_file` checks in every file's metadata.
 
-The table (:data:`SUN_BASIS`)
------------------------------
-The illuminance depends on the sun zenith only through the relative optical
-mass m (every transmittance of the model is exp(-m x depth)), and its
-logarithm is nearly linear in m; so the table holds ln X, ln Y, ln Z as 2D
-Chebyshev polynomials of x affine in m over [m(0), m(pi/2)] = [0.99949, 36.510]
-and y affine in the turbidity over [2.5, 6]. RGB is the recorded XYZ -> RGB
-matrix of the file's colourspace (colour-science's, no chromatic adaptation:
-the sky's colour route) times exp(ln XYZ). Its held-out error is in the file's
-metadata (``tables.sun.errors``; ``tools/fit_sky.py`` prints it).
+The table's form (its variables, polynomial form, units and bound: what the
+file stores for the sun) is :mod:`skysh.sun_table`, shared with the file format
+(:mod:`skysh.coefficient_file`, which checks it in every file's metadata) and
+the fit; :meth:`SunLight.load` reads the file with :func:`skysh.coefficient_file.read`.
 
 Near the horizon the sun leaves the sRGB gamut: blue (at T = 6 green too)
 turns slightly negative, as :func:`skysh.solar.illuminance_rgb` does. Values
-are never NaN or inf, never 0 in XYZ: the file bounds each channel's sum of
-|coefficients| by :data:`SUN_MAX_LN` (at sun zenith pi/2 and T = 6 the
-illuminance is about 2.5e-4 lux).
+are never NaN or inf, never 0 in XYZ (the file bounds the table by
+:data:`skysh.sun_table.SUN_MAX_LN`).
 
 Cost
 ----
@@ -44,7 +31,7 @@ terms of both variables as ``cos(k acos v)`` in one vectorised cosine, two
 ``np.dot`` contractions (in x, then in y), one exp and one 3 x 3 product.
 ``python benchmarks/bench_sunlight.py`` prints it against a 1-band
 :meth:`skysh.SkySH.coefficients` call. ``import skysh.sunlight`` imports numpy
-only (not colour-science, :mod:`skysh.solar` or the coefficient file reader).
+and the coefficient file reader only (not colour-science or :mod:`skysh.solar`).
 
 References
 ----------
@@ -64,86 +51,19 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from skysh import poly
+from skysh import coefficient_file, poly
 from skysh._checks import as_float_array, check_range, check_size, number_text, real_scalar
 from skysh._npz import CoefficientFileError
+from skysh.sun_table import SUN_AIR_MASS_COEFFICIENTS, SUN_AIR_MASS_RANGE, sun_variables
 
-__all__ = [
-    "SUN_AIR_MASS_COEFFICIENTS", "SUN_AIR_MASS_RANGE", "SUN_VARIABLES", "SUN_BASIS", "SUN_UNITS", "SUN_MAX_LN",
-    "air_mass", "sun_variables", "SunLight",
-]
-
-SUN_AIR_MASS_COEFFICIENTS: tuple[float, float, float] = (0.15, 93.885, 1.253)
-"""(a, b, c) of Kasten's (1966) relative optical mass m = 1 / (cos theta + a (b - theta[deg])^-c)
-(``skysh.solar.KASTEN_COEFFICIENTS``, repeated so that the runtime imports no physics; a test compares)."""
+__all__ = ["SunLight"]
 
 _A, _B, _NEG_C = SUN_AIR_MASS_COEFFICIENTS[0], SUN_AIR_MASS_COEFFICIENTS[1], -SUN_AIR_MASS_COEFFICIENTS[2]
 _DEG: float = 180.0 / math.pi
 _ZMIN, _ZMAX = poly.SUN_ZENITH_DOMAIN
 _TMIN, _TMAX = poly.TURBIDITY_DOMAIN
-
-
-def _air_mass_scalar(sun_zenith: float) -> float:
-    return 1.0 / (math.cos(sun_zenith) + _A * (_B - sun_zenith * _DEG) ** _NEG_C)
-
-
-SUN_AIR_MASS_RANGE: tuple[float, float] = (_air_mass_scalar(_ZMIN), _air_mass_scalar(_ZMAX))
-"""(m0, m1): Kasten's m at sun zenith 0 and pi/2, 0.99949 and 36.510 (the interval of the variable x).
-
-Kasten's formula dips slightly below m0 for sun zeniths just above 0 (its
-derivative at 0 is slightly negative; by less than 1e-7, which
-``tests/test_sunlight.py`` asserts); there x is clamped to -1, which moves
-ln XYZ by less than 1e-7 (its slope in m is of order 1): far below the fit's error."""
-
 _X_SCALE: float = 2.0 / (SUN_AIR_MASS_RANGE[1] - SUN_AIR_MASS_RANGE[0])
 _Y_SCALE: float = 2.0 / (_TMAX - _TMIN)
-
-SUN_VARIABLES: dict[str, str] = {
-    "m": "1 / (cos sun_zenith + 0.15 (93.885 - sun_zenith[deg])^-1.253) (Kasten 1966 relative optical mass)",
-    "x": "2 (m - m0) / (m1 - m0) - 1 clamped to [-1, 1], [m0, m1] = air_mass_range (m at sun zenith 0 and pi/2)",
-    "y": "2 (T - 2.5) / (6 - 2.5) - 1 (turbidity T, affine)",
-}
-"""The sun table's Chebyshev variables, as recorded in the file's metadata."""
-
-SUN_BASIS: str = (
-    "ln XYZ_c = sum_k table[k, 0, c] T_i(x) T_j(y), k = i (d_y + 1) + j, c = X, Y, Z: CIE 1931 XYZ of the "
-    "sun's direct normal illuminance (Preetham 1999 appendix), lux; RGB = rgb_from_xyz @ exp(ln XYZ)"
-)
-"""The polynomial form of the sun table, as recorded in the file's metadata."""
-
-SUN_UNITS: str = "ln lux (CIE 1931 XYZ of the direct normal illuminance)"
-"""Units of the sun table's values."""
-
-SUN_MAX_LN: float = 100.0
-"""Largest sum of |coefficients| of a sun table channel (ln lux), hence largest |ln XYZ| (|T_i T_j| <= 1).
-
-exp then lies in [e^-100, e^100] = [3.7e-44, 2.7e43] lux: never 0, inf or NaN, also on the
-horizon. A fit's largest sum is far below (``tools/fit_sky.py`` prints it with the fit)."""
-
-
-def air_mass(sun_zenith: ArrayLike) -> NDArray[np.float64]:
-    """Kasten's relative optical mass at ``sun_zenith`` (radians in [0, pi/2], any shape): dimensionless, 0.9995 .. 36.51."""
-    ts = check_range(sun_zenith, "sun_zenith", _ZMIN, _ZMAX, unit="rad (the fitted domain)")
-    return 1.0 / (np.cos(ts) + _A * (_B - ts * _DEG) ** _NEG_C)
-
-
-def sun_variables(sun_zenith: ArrayLike, turbidity: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """
-    The sun table's Chebyshev variables (:data:`SUN_VARIABLES`), each in [-1, 1].
-
-    Parameters
-    ----------
-    sun_zenith, turbidity
-        Radians in [0, pi/2] and turbidity in [2.5, 6], any shapes (not broadcast).
-
-    Returns
-    -------
-    x, y
-        x = 2 (m - m0) / (m1 - m0) - 1 (clamped), y = 2 (T - 2.5) / 3.5 - 1.
-    """
-    m = air_mass(sun_zenith)
-    t = check_range(turbidity, "turbidity", _TMIN, _TMAX, unit="(the fitted domain)")
-    return np.clip((m - SUN_AIR_MASS_RANGE[0]) * _X_SCALE - 1.0, -1.0, 1.0), (t - _TMIN) * _Y_SCALE - 1.0
 
 
 def _domain_error(ts: float, t: float) -> ValueError | None:
@@ -189,7 +109,7 @@ class SunLight:
             raise CoefficientFileError(
                 "the SkyTable has no sun table (tables['sun']): every coefficient file of format version 3 holds "
                 "one; an in-memory SkyTable needs it for the sun's light")
-        sky_table.validate()  # shapes, degrees, bounds (SUN_MAX_LN) and the metadata block's fields where present
+        sky_table.validate()  # shapes, degrees, bounds (sun_table.SUN_MAX_LN) and the metadata block's fields where present
         block = sky_table.metadata.get("tables", {}).get("sun", {})
         if "rgb_from_xyz" not in block:
             raise CoefficientFileError("metadata tables['sun'] lacks rgb_from_xyz, the XYZ -> RGB matrix of the file's "
@@ -214,8 +134,6 @@ class SunLight:
     @classmethod
     def load(cls, path: str | Path | None = None) -> SunLight:
         """The sun of the shipped coefficient file (or ``path``), checked (:func:`skysh.coefficient_file.read`)."""
-        from skysh import coefficient_file  # the reader, only when loading
-
         return cls(coefficient_file.read(path))
 
     def __repr__(self) -> str:

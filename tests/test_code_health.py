@@ -5,7 +5,6 @@ Code health, measured (issue 14)
 Every ``.py`` file below ``skysh/`` and ``tools/`` (recursively) is parsed, nothing is
 imported or run, and held to:
 
--   :data:`MAX_MODULE_LINES` lines per module (physical lines, docstrings and comments included);
 -   :data:`MAX_FUNCTION_LINES` lines per function or method, from its ``def`` line to its last
     line (decorators not counted; a nested function counts in its parent and on its own);
 -   :data:`MAX_COMPLEXITY`, McCabe's cyclomatic complexity as radon computes it
@@ -33,6 +32,12 @@ word *turbidity*, or next to *zenith* in radians (an end in pi) or degrees (``de
 it), must equal one of those constants (:func:`prose_ranges`). Intervals whose ends are not
 numbers (``[{low:g}, {high:g}]``, ``$turbidity_domain``) are derived from the constants in code.
 
+Module size: issue 24 ("One algorithm, one place") retired the cap of 700 physical lines per module
+(it bred squeezed prose and modules cut by size rather than by concept) in favour of budgets of code
+lines (physical lines less docstrings, comments and blank lines), measured by ``tools/code_size.py``
+with the package's import cycles and ``__all__`` names. The tests here hold that tool's counting to
+small sources with known answers and its run over ``skysh/`` to basic sanity.
+
 Every violation is listed in the failure message as ``path:line: what (measured > limit)``.
 The negative controls feed small synthetic sources to the same checkers. The checked files are
 parsed, never imported; the domains are read from the modules that own them.
@@ -42,6 +47,7 @@ from __future__ import annotations
 
 import ast
 import io
+import json
 import math
 import re
 import textwrap
@@ -52,13 +58,15 @@ from pathlib import Path
 from typing import NamedTuple
 
 import pytest
+from conftest import TOOLS, load_script
 from radon.complexity import cc_visit
 from radon.visitors import Class, Function
 
 ROOT: Path = Path(__file__).resolve().parent.parent
 
-MAX_MODULE_LINES: int = 700
-"""Issue 14: a module a reader takes in one sitting."""
+code_size = load_script(TOOLS / "code_size.py", "code_size_under_test")
+"""``tools/code_size.py`` (issue 24's code-line measure), loaded as a module."""
+
 MAX_FUNCTION_LINES: int = 80
 """Issue 14: a function that fits on a screen and a half."""
 MAX_COMPLEXITY: int = 20
@@ -127,11 +135,6 @@ def _is_first_party(dotted: str, modules: frozenset[str]) -> bool:
 # --------------------------------------------------------------------------- #
 # Size and complexity
 # --------------------------------------------------------------------------- #
-def module_length(path: str, source: str) -> list[Violation]:
-    lines = len(source.splitlines())
-    return [Violation(path, 1, f"module of {lines} lines > {MAX_MODULE_LINES}")] if lines > MAX_MODULE_LINES else []
-
-
 def _functions(tree: ast.AST, prefix: str = "") -> Iterator[tuple[str, ast.FunctionDef | ast.AsyncFunctionDef]]:
     for node in ast.iter_child_nodes(tree):
         if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
@@ -383,11 +386,6 @@ def test_scope_is_not_empty():
     assert any(p.name == "sh.py" for p in files) and any("report" in p.parts for p in files)
 
 
-def test_module_length():
-    found = [v for p in python_files(SIZE_SCOPE) for v in module_length(_rel(p), _parsed(p)[0])]
-    _check(found, "module length")
-
-
 def test_function_length():
     found = [v for p in python_files(SIZE_SCOPE) for v in function_lengths(_rel(p), _parsed(p)[1])]
     _check(found, "function length")
@@ -435,8 +433,6 @@ def _branchy(n: int) -> str:
 
 
 def test_negative_control_sizes():
-    assert module_length("m.py", "x = 1\n" * (MAX_MODULE_LINES + 1))
-    assert not module_length("m.py", "x = 1\n" * MAX_MODULE_LINES)
     long_body = "".join(f"        y{i} = {i}\n" for i in range(MAX_FUNCTION_LINES))  # def line + 80 = 81 lines
     source = f"class A:\n    def long(self):\n{long_body}\n"
     found = function_lengths("m.py", ast.parse(source))
@@ -544,3 +540,170 @@ PROSE_CASES: list[tuple[str, bool]] = [
 def test_negative_control_prose_ranges(source, flagged):
     found = prose_ranges("m.py", source + "\n")
     assert bool(found) == flagged, found
+
+
+# --------------------------------------------------------------------------- #
+# Code size (issue 24): tools/code_size.py's counting, on sources with known answers
+# --------------------------------------------------------------------------- #
+COUNTED_SOURCE: str = """\
+\"\"\"The module's docstring,
+over two lines.\"\"\"
+
+import os  # a trailing comment: a code line
+
+# a comment line, then two blank lines
+
+
+class K:
+    \"\"\"The class's docstring.\"\"\"
+
+    x = 1
+    \"\"\"An attribute's docstring: prose, as Sphinx and PEP 257 read it.\"\"\"
+
+    def f(self):
+        \"\"\"
+        The function's docstring.
+        \"\"\"
+        return \"\"\"
+void main() {
+
+    gl_FragColor = vec4(1.0);
+}
+\"\"\"
+
+
+def g(n):
+    prose = \"\"\"two lines
+of prose\"\"\"
+    joined = ("const a = 1;\\n"
+              "const b = 2;\\n")
+    return prose, joined, f\"\"\"
+float k{n}() {{ return 1.0; }}
+\"\"\", os.sep
+"""
+"""Every kind of line: docstrings (module, class, function), comments, blank lines, an attribute's
+docstring, a GLSL string with a blank line in it, multi-line prose, implicitly joined code, an f-string."""
+
+COUNTED_CODE: set[int] = {4, 9, 12, 15, *range(19, 25), *range(27, 35)}
+"""The code lines of :data:`COUNTED_SOURCE` (by hand): the statements and every line of its
+non-docstring strings (the blank line 21 inside the GLSL too)."""
+
+COUNTED_CODE_STRINGS: set[int] = {*range(19, 25), 30, 31, *range(32, 35)}
+"""Its lines of generated-code-like strings: the GLSL (19-24), the joined JavaScript (30-31), the
+f-string (32-34); not the two lines of prose (28-29), which hold neither ``;`` nor ``{``."""
+
+
+def test_code_size_counts_lines():
+    size, tree = code_size.measure(COUNTED_SOURCE, "m")
+    assert size.physical == 34 == len(COUNTED_SOURCE.splitlines())
+    assert code_size.code_lines(COUNTED_SOURCE, tree) == COUNTED_CODE
+    assert code_size.code_string_lines(tree) == COUNTED_CODE_STRINGS
+    assert (size.code, size.code_strings, size.all_names) == (len(COUNTED_CODE), len(COUNTED_CODE_STRINGS), 0)
+
+
+@pytest.mark.parametrize("source, physical, code", [
+    ("", 0, 0),
+    ("x = 1", 1, 1),  # no final newline
+    ('"""Only a docstring."""\n\n# and a comment\n', 3, 0),
+    ('x = "caf\u00e9"; """not a docstring"""\n', 1, 1),
+    ('def f():\n    """\u00e9t\u00e9"""; return 1\n', 2, 2),  # a non-ASCII docstring, then code on its line
+    ("x = (1 +\n     2)  # a comment\n", 2, 2),
+])
+def test_code_size_edge_cases(source, physical, code):
+    size, _ = code_size.measure(source, "m")
+    assert (size.physical, size.code) == (physical, code)
+
+
+def test_code_size_all_names():
+    assert code_size.measure("__all__ = ['a', 'b']\n__all__ += ('c',)\n", "m")[0].all_names == 3
+    assert code_size.measure("__all__: list[str] = ['a']\nx = ['b', 'c']\n", "m")[0].all_names == 1
+    assert code_size.measure("def f():\n    __all__ = ['a']\n", "m")[0].all_names == 0  # module level only
+
+
+IMPORTING_SOURCE: str = """\
+import typing
+from typing import TYPE_CHECKING
+
+import numpy
+import skysh.b
+from skysh import SkySH, c
+from . import d
+from .e import thing
+
+if TYPE_CHECKING:
+    from skysh.f import Only
+if typing.TYPE_CHECKING:
+    import skysh.f
+else:
+    from skysh.g import fallback
+
+
+def lazy():
+    from skysh.h import helper
+    import skysh.h.deep
+    return helper
+"""
+"""A module ``skysh.a`` importing its package's modules in every way :func:`code_size.imports` reads."""
+
+PACKAGE_MODULES: frozenset[str] = frozenset({"skysh", *(f"skysh.{m}" for m in "abcdefgh")})
+
+
+def test_code_size_imports():
+    found = code_size.imports(ast.parse(IMPORTING_SOURCE), "skysh.a", PACKAGE_MODULES)
+    assert sorted((i.target, i.line, i.in_function) for i in found) == [
+        ("skysh", 6, False),  # SkySH is no module: an import of skysh/__init__.py
+        ("skysh.b", 5, False), ("skysh.c", 6, False), ("skysh.d", 7, False), ("skysh.e", 8, False),
+        ("skysh.g", 15, False),  # the else branch of TYPE_CHECKING is read, its body (skysh.f) is not
+        ("skysh.h", 19, True), ("skysh.h", 20, True),
+    ]
+    assert code_size.imports(ast.parse("from . import b\n"), "skysh", PACKAGE_MODULES, is_package=True)[0].target \
+        == "skysh.b"
+
+
+@pytest.mark.parametrize("edges, expected", [
+    ([("a", "b"), ("b", "c")], []),
+    ([("a", "b"), ("b", "a"), ("b", "c")], [["a", "b"]]),
+    ([("a", "b"), ("b", "c"), ("c", "a"), ("d", "e"), ("e", "d"), ("c", "d")], [["a", "b", "c"], ["d", "e"]]),
+    ([("a", "a"), ("a", "b")], [["a"]]),
+])
+def test_code_size_cycles(edges, expected):
+    assert code_size.cycles(edges) == expected
+
+
+def test_code_size_command(tmp_path, capsys):
+    """The command over a small tree: a lazy import closing a cycle, and a module outside it."""
+    package = tmp_path / "skysh"
+    package.mkdir()
+    (package / "__init__.py").write_text('"""The package."""\n', encoding="utf-8")
+    (package / "a.py").write_text("from skysh import b\n\n__all__ = ['x']\nx = b\n", encoding="utf-8")
+    (package / "b.py").write_text("def f():\n    from skysh.a import x\n    return x\n", encoding="utf-8")
+    (package / "c.py").write_text("import skysh.a\n", encoding="utf-8")
+    assert code_size.main(["--json", "--root", str(tmp_path)]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert [m["path"] for m in report["modules"]] == ["skysh/a.py", "skysh/b.py", "skysh/c.py", "skysh/__init__.py"]
+    assert report["groups"][0] | {"name": ""} == {"name": "", "path": "", "physical": 9, "code": 7, "code_strings": 0,
+                                                "all_names": 1, "modules": 4}
+    assert report["cycles"] == [["skysh.a", "skysh.b"]]
+    assert code_size.main(["--root", str(tmp_path)]) == 0
+    assert "skysh.a <-> skysh.b: skysh/a.py:1 imports skysh.b; skysh/b.py:2 imports skysh.a (in a function)" \
+        in capsys.readouterr().out
+
+
+def test_code_size_of_skysh():
+    """The tool over the real package: every module counted, the totals the sums, the cycles inside skysh."""
+    report = code_size.measure_repository(ROOT)
+    assert sorted(m.path for m in report.modules) == [_rel(p) for p in python_files(("skysh",))]
+    for m in report.modules:
+        assert 0 <= m.code_strings <= m.code < m.physical, m
+    package, export = report.groups
+    exports = [m for m in report.modules if m.name in code_size.EXPORT_MODULES]
+    for group, members in ((package, report.modules), (export, exports)):
+        assert group.modules == len(members) and group.physical == sum(m.physical for m in members)
+        assert (group.code, group.code_strings, group.all_names) == tuple(
+            sum(getattr(m, c) for m in members) for c in ("code", "code_strings", "all_names"))
+    assert export.modules == len(code_size.EXPORT_MODULES) and 0 < export.code_strings < export.code < package.code
+    assert [m.code for m in report.modules] == sorted((m.code for m in report.modules), reverse=True)
+    assert any(i.in_function for i in report.imports) and any(not i.in_function for i in report.imports)
+    names = {m.name for m in report.modules}
+    assert all(set(cycle) <= names and len(cycle) > 1 for cycle in report.cycles)
+

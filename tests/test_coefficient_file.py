@@ -31,7 +31,7 @@ import pytest
 from conftest import canonical_json
 
 from skysh import coefficient_file as cf
-from skysh import poly, sunlight
+from skysh import poly, sun_table
 from skysh.runtime import SkySH
 
 ENTRIES: tuple[str, ...] = ("format", "format_version", "table", "degrees", "sun_table", "sun_degrees", "irradiance_table",
@@ -82,8 +82,8 @@ def _irradiance_block(degrees: list[list[int]], colourspace: str = "sRGB") -> di
 
 def _sun_block(degrees: list[list[int]], colourspace: str = "sRGB", **extra: Any) -> dict[str, Any]:
     """The block write() stores for the sun: the format's fixed fields (typed from the module), degrees, colourspace."""
-    fields = {"air_mass_range": list(sunlight.SUN_AIR_MASS_RANGE), "basis": sunlight.SUN_BASIS, "domain": cf.DOMAIN,
-              "term_order": cf.TERM_ORDER, "units": sunlight.SUN_UNITS, "variables": sunlight.SUN_VARIABLES}
+    fields = {"air_mass_range": list(sun_table.SUN_AIR_MASS_RANGE), "basis": sun_table.SUN_BASIS, "domain": cf.DOMAIN,
+              "term_order": cf.TERM_ORDER, "units": sun_table.SUN_UNITS, "variables": sun_table.SUN_VARIABLES}
     return {**fields, "colourspace": colourspace, "degrees": degrees, **extra}
 
 
@@ -261,7 +261,7 @@ class TestBounds:
         table = np.random.default_rng(3).uniform(-cf.MAX_TABLE_MAGNITUDE, cf.MAX_TABLE_MAGNITUDE,
                                                  ((top + 1) ** 2, bands * (bands + 1) // 2, 3))
         # The sun at its bounds too: every channel's |values| summing to SUN_MAX_LN, the matrix at MAX_MATRIX_ENTRY.
-        sun = np.full(((top + 1) ** 2, 1, 3), sunlight.SUN_MAX_LN / (top + 1) ** 2)
+        sun = np.full(((top + 1) ** 2, 1, 3), sun_table.SUN_MAX_LN / (top + 1) ** 2)
         sun[::2] *= -1.0
         matrix = [[cf.MAX_MATRIX_ENTRY, -cf.MAX_MATRIX_ENTRY, 0]] * 3
         metadata = {"colourspace": "ACES2065-1", "padding": "x" * (cf.MAX_METADATA_BYTES - 3500),

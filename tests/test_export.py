@@ -66,9 +66,9 @@ from skysh.export import (
     DEFAULT_FILE_NAMES,
     EXPORT_FORMATS,
     export_source,
-    export_tables,
 )
 from skysh.export_lights import BY_INTENT
+from skysh.export_tables import engine_plan, export_tables
 
 REQUIRED_TOLERANCE: float = 1e-6
 """The issue's requirement for the C export (relative to the worst channel's DC)."""
@@ -99,8 +99,8 @@ CONTROL_MARGIN: float = 1e3
 """A negative control must miss by this factor times the tolerance."""
 
 ENGINE_SNAP_TOL: float = 1e-13
-"""export_js's engine plan against the engine's map, over the largest entry: the fold snaps entries to 1 within
-export_js.ENGINE_UNIT (1e-14) and to 0 within ENGINE_ZERO (1e-13) of the largest, and otherwise only divides and
+"""export_tables' engine plan against the engine's map, over the largest entry: the fold snaps entries to 1 within
+export_tables.ENGINE_UNIT (1e-14) and to 0 within ENGINE_ZERO (1e-13) of the largest, and otherwise only divides and
 multiplies by the band factor (a few ulps): ENGINE_ZERO bounds both."""
 
 CXX: str | None = shutil.which("c++") or shutil.which("g++") or shutil.which("clang++")
@@ -653,9 +653,8 @@ class TestEngineOtherLanguages:
     @pytest.mark.parametrize(("name", "bands"), engine_cases())
     def test_plan_refactors_the_engine_map(self, name: str, bands: int) -> None:
         """matrix x (band factor of each column) is the engine's map: the fold changes no number beyond
-        the snapping of export_js.ENGINE_UNIT and ENGINE_ZERO (1e-13 of the largest entry bounds both)."""
+        the snapping of export_tables.ENGINE_UNIT and ENGINE_ZERO (1e-13 of the largest entry bounds both)."""
         from skysh import engines
-        from skysh.export_js import engine_plan
 
         plan, emap = engine_plan(name, bands), engines.engine_map(name, bands)
         band_of_column = np.repeat([sh.lm(i)[0] for i in range(bands * bands)], 3)
@@ -686,8 +685,6 @@ class TestEngineOtherLanguages:
     @pytest.mark.parametrize("language", ["glsl", "hlsl"])
     @pytest.mark.parametrize(("name", "bands"), engine_cases())
     def test_shader_structure(self, exported: Exported, tool_runs: ToolRuns, language: str, name: str, bands: int) -> None:
-        from skysh.export_js import engine_plan
-
         source = exported(language, bands=bands, engine=name)
         count = engine_plan(name, bands).offset.size
         assert f"#define SKYSH_ENGINE_COUNT {count}" in source
@@ -740,7 +737,7 @@ class TestShaderExport:
 
 def evaluate_table(table: np.ndarray, source: Any, p: tuple, irradiance: bool) -> np.ndarray:
     """3-band coefficients from a table (DX+1, DY+1, 6, 3) as the exports document it (no Gibbs filter); ``source``
-    gives the maps and factors: the JSON payload or :func:`skysh.export.export_tables`' numbers."""
+    gives the maps and factors: the JSON payload or :func:`skysh.export_tables.export_tables`' numbers."""
     if isinstance(source, dict):
         x_map, y_map = (source["x"]["scale"], source["x"]["shift"]), (source["y"]["scale"], source["y"]["shift"])
         gibbs, lobe = np.array(source["gibbs"]), np.array(source["lobe"])

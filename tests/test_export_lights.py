@@ -45,8 +45,9 @@ from background import GLSLANG, RUN_DIR, ToolJob, ToolRuns, glslang_job, selecte
 from conftest import PLAIN_DIP, SKIP_NO_CC, SKIP_NO_GLSLANG, Exported, dc_relative_error
 
 from skysh import SkySH, preetham, sh, shmin
-from skysh.export import export_source, export_tables
+from skysh.export import export_source
 from skysh.export_lights import BY_INTENT, embed_table, float32_literal, light_tables
+from skysh.export_tables import export_tables
 
 DOUBLE_TOLERANCE: float = 1e-12
 """The double C build against the runtime: the same arithmetic up to the Chebyshev recurrence, the order of

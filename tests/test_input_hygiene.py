@@ -529,8 +529,8 @@ OTHER_ROWS: list[Row] = [
         valid_factory=lambda: dict(zip(("dc", "words"), _module("quantize").compress(C9)))),
     Row("quantize.table3_errors", _other("quantize", "table3_errors"), dict(coeffs=C9[None], bits=8, n_theta=4),
         dict(bits=Count(2, 32), n_theta=Count(3))),
-    # skysh.export
-    Row("export.export_tables", _other("export", "export_tables"), dict(sky=None, bands=3),
+    # skysh.export_tables, skysh.export
+    Row("export_tables.export_tables", _other("export_tables", "export_tables"), dict(sky=None, bands=3),
         dict(sky=Values((("object", object()), ("none", None))), bands=Count(1, 7)),
         valid_factory=lambda: dict(sky=the_sky(), bands=3)),
     Row("export.double_literal", _other("export", "double_literal"), dict(value=0.1),

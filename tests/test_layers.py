@@ -6,9 +6,9 @@ Every ``skysh/*.py`` is parsed with :mod:`ast` (nothing is imported) and its imp
 other ``skysh`` modules are checked against two tables:
 
 -   :data:`LAYERS`: each module's layer. A module may import only modules of strictly
-    lower layers, so the import graph has no cycle and no upward edge. The two lazy
-    upward imports that exist are listed in :data:`LAZY_UPWARD` with their reason; they
-    must stay inside a function.
+    lower layers, at module level and inside functions alike, so the import graph has no
+    cycle and no upward edge (issue 24 removed the last two, which a function-level import
+    broke at run time).
 -   :data:`ALLOWED`: each module's ``skysh`` imports (module level or inside functions;
     ``if TYPE_CHECKING:`` blocks are not imports at run time and are not counted). A new
     import fails the test until it is added here, where :data:`LAYERS` checks its
@@ -38,29 +38,34 @@ LAYERS: dict[str, int] = {
     "_version": 0, "_checks": 0, "_npz": 0, "files": 0, "_mitsuba_data": 0, "argtypes": 0,
     # 1: SH mathematics and the fitted parameters' domain and basis
     "sh": 1, "poly": 1, "sun": 1,
-    # 2: the sky model, and algorithms on SH coefficients alone
-    "preetham": 2, "ground": 2, "shmin": 2, "hazel": 2, "quantize": 2,
-    # 3: built on those: the spectral sun model, deringing, the sun's light
-    "solar": 3, "dering": 3, "sunlight": 3,
-    # 4: the coefficient file; the Hosek-Wilkie sky (built on the solar spectrum and the ground)
-    "coefficient_file": 4, "hosek": 4,
+    # 2: the sky model, algorithms on SH coefficients alone, the sun table's form (what the file stores for the sun)
+    "preetham": 2, "ground": 2, "shmin": 2, "hazel": 2, "quantize": 2, "sun_table": 2,
+    # 3: built on those: the spectral sun model, deringing, the coefficient file
+    "solar": 3, "dering": 3, "coefficient_file": 3,
+    # 4: the sun's light (from the file's sun table); the Hosek-Wilkie sky (the solar spectrum and the ground)
+    "sunlight": 4, "hosek": 4,
     # 5: the offline fit, the per-frame sun and ground, deringing as emitted code
     "fit": 5, "lights": 5, "export_dering": 5,
     # 6: the per-frame runtime
     "runtime": 6, "export_lights": 6,
-    # 7: consumers: the irradiance fit, engine conventions, rendering, exports
-    "irradiance_fit": 7, "engines": 7, "render": 7, "export": 7, "export_js_parts": 7,
-    # 8: the JavaScript export (built on export)
-    "export_js": 8, "engine_sun": 8,
-    # 9: applications and the command line's text
-    "viewer": 9, "cli_text": 9,
-    # 10: the command line
-    "cli": 10,
-    # 11: the package and its entry point
-    "__init__": 11, "__main__": 11,
+    # 7: consumers: the irradiance fit, engine conventions, rendering, the JavaScript export's parts
+    "irradiance_fit": 7, "engines": 7, "render": 7, "export_js_parts": 7,
+    # 8: built on the engines: the numbers every export is written from (with the engines' plans), the engines' sun
+    "export_tables": 8, "engine_sun": 8,
+    # 9: the JavaScript and JSON exports
+    "export_js": 9,
+    # 10: the exports by language (C, GLSL, HLSL; js and json from export_js)
+    "export": 10,
+    # 11: applications and the command line's text
+    "viewer": 11, "cli_text": 11,
+    # 12: the command line
+    "cli": 12,
+    # 13: the package and its entry point
+    "__init__": 13, "__main__": 13,
 }
 """Layer of every module of ``skysh/`` (issue 14's picture: SH mathematics -> sky model -> fit
-and file -> runtime -> post-processing -> exports, engines and CLI, as the imports really run)."""
+and file -> runtime -> post-processing -> exports, engines and CLI, as the imports really run;
+issue 24: the coefficient file below the sun's light, every export below the language dispatch)."""
 
 ALLOWED: dict[str, frozenset[str]] = {name: frozenset(deps) for name, deps in {
     "_version": (),
@@ -77,24 +82,26 @@ ALLOWED: dict[str, frozenset[str]] = {name: frozenset(deps) for name, deps in {
     "shmin": ("_checks", "sh"),
     "hazel": ("_checks", "sh"),
     "quantize": ("_checks", "sh"),
+    "sun_table": ("_checks", "poly"),
     "solar": ("_checks", "poly", "sh", "preetham"),
     "dering": ("_checks", "sh", "shmin"),
-    "sunlight": ("_checks", "_npz", "poly", "coefficient_file"),
-    "coefficient_file": ("_checks", "_npz", "_version", "files", "poly", "sunlight"),
+    "coefficient_file": ("_checks", "_npz", "_version", "files", "poly", "sun_table"),
+    "sunlight": ("_checks", "_npz", "poly", "coefficient_file", "sun_table"),
     "hosek": ("_checks", "_mitsuba_data", "ground", "preetham", "sh", "solar"),
-    "fit": ("_checks", "coefficient_file", "poly", "preetham", "sh", "sunlight", "solar"),
-    "lights": ("_checks", "coefficient_file", "ground", "poly", "preetham", "sh", "solar", "sunlight"),
+    "fit": ("_checks", "coefficient_file", "poly", "preetham", "sh", "sun_table", "solar"),
+    "lights": ("_checks", "coefficient_file", "ground", "poly", "preetham", "sh", "solar", "sun_table"),
     "runtime": ("_checks", "coefficient_file", "ground", "lights", "poly", "preetham", "sh", "sunlight", "dering"),
     "export_dering": ("_checks", "dering", "sh", "shmin"),
     "irradiance_fit": ("_checks", "fit", "preetham", "sh", "shmin"),
     "engines": ("_checks", "sh"),
     "render": ("_checks", "files", "ground", "lights", "preetham", "runtime", "sh", "solar"),
-    "export_lights": ("_checks", "coefficient_file", "ground", "lights", "poly", "preetham", "solar", "sunlight",
-                      "export_dering"),
-    "export": ("_checks", "_version", "coefficient_file", "poly", "preetham", "runtime", "sh", "export_lights",
-               "export_js"),
-    "export_js": ("_checks", "_version", "export", "export_lights", "export_js_parts", "preetham", "runtime", "sh", "engines"),
+    "export_lights": ("_checks", "coefficient_file", "ground", "lights", "poly", "preetham", "solar", "sun_table",
+                      "sunlight", "export_dering"),
     "export_js_parts": ("export_lights", "export_dering"),
+    "export_tables": ("_checks", "coefficient_file", "engines", "export_lights", "poly", "runtime", "sh"),
+    "export_js": ("_checks", "_version", "engines", "export_js_parts", "export_lights", "export_tables", "preetham",
+                  "runtime"),
+    "export": ("_checks", "_version", "export_js", "export_lights", "export_tables", "preetham", "runtime"),
     "engine_sun": ("_checks", "engines"),
     "viewer": ("_version", "engines", "export", "files", "preetham", "render", "runtime", "sh", "sunlight"),
     "cli_text": ("_checks", "engines", "engine_sun", "export", "sh"),
@@ -103,15 +110,11 @@ ALLOWED: dict[str, frozenset[str]] = {name: frozenset(deps) for name, deps in {
     "__init__": ("_version", "runtime"),
     "__main__": ("cli",),
 }.items()}
-"""The ``skysh`` imports of every module as of issue 14 (after the studies moved to tools/studies/)."""
+"""The ``skysh`` imports of every module as of issue 24 (issue 14's, after the studies moved to tools/studies/,
+with the sun table's form in sun_table and the exports' shared numbers in export_tables)."""
 
-LAZY_UPWARD: dict[tuple[str, str], str] = {
-    ("sunlight", "coefficient_file"): "SunLight.load reads the file, whose format imports sunlight's constants",
-    ("export", "export_js"): "export_source dispatches the js/json languages to export_js, built on export",
-}
-"""Upward imports that exist today, each only inside a function (a cycle broken at run time)."""
-
-RUNTIME_SIDE: tuple[str, ...] = ("runtime", "sunlight", "coefficient_file", "sh", "poly", "dering", "shmin", "engines")
+RUNTIME_SIDE: tuple[str, ...] = ("runtime", "sunlight", "coefficient_file", "sun_table", "sh", "poly", "dering", "shmin",
+                                "engines")
 """Modules a renderer loads per frame or at start-up: light at import."""
 
 NOT_AT_RUNTIME_IMPORT: frozenset[str] = frozenset({"colour", "matplotlib"})
@@ -186,7 +189,7 @@ def imports_of(source: str) -> list[Import]:
 
 
 def layer_violations(module: str, source: str) -> list[str]:
-    """What is wrong with ``module``'s imports against :data:`ALLOWED`, :data:`LAYERS` and :data:`LAZY_UPWARD`."""
+    """What is wrong with ``module``'s imports against :data:`ALLOWED` and :data:`LAYERS`."""
     problems = []
     for imp in imports_of(source):
         if imp.type_only or imp.target.startswith("ext:") or imp.target == module:
@@ -195,11 +198,7 @@ def layer_violations(module: str, source: str) -> list[str]:
         if imp.target not in ALLOWED.get(module, frozenset()):
             problems.append(f"{where}: not in test_layers.ALLOWED[{module!r}]")
         if imp.target in LAYERS and module in LAYERS and LAYERS[imp.target] >= LAYERS[module]:
-            reason = LAZY_UPWARD.get((module, imp.target))
-            if reason is None:
-                problems.append(f"{where}: layer {LAYERS[imp.target]} from layer {LAYERS[module]}, not a lower layer")
-            elif not imp.lazy:
-                problems.append(f"{where}: the known upward import ({reason}) must stay inside a function")
+            problems.append(f"{where}: layer {LAYERS[imp.target]} from layer {LAYERS[module]}, not a lower layer")
     return problems
 
 
@@ -234,9 +233,9 @@ def test_every_module_has_a_layer_and_a_row():
 
 
 def test_the_table_points_down():
-    """Every allowed import goes to a strictly lower layer, except the listed lazy ones."""
+    """Every allowed import goes to a strictly lower layer (so the allowed graph has no cycle)."""
     upward = [(m, d) for m, deps in ALLOWED.items() for d in deps if LAYERS[d] >= LAYERS[m]]
-    assert sorted(upward) == sorted(LAZY_UPWARD)
+    assert upward == []
 
 
 @pytest.mark.parametrize("module", sorted(MODULES))
@@ -278,8 +277,11 @@ def test_negative_control_upward_imports_are_caught():
     assert any("not a lower layer" in p for p in layer_violations("hazel", lazy_upward))
     facade = "from skysh import SkySH\n"
     assert any("imports runtime" in p for p in layer_violations("quantize", facade))
-    known_but_eager = "from skysh import coefficient_file\n"
-    assert any("must stay inside a function" in p for p in layer_violations("sunlight", known_but_eager))
+    # Issue 24's two former cycles, written back as lazy imports: refused as upward.
+    file_to_sun = "def f():\n    from skysh.sunlight import SunLight\n    return SunLight\n"
+    assert any("not a lower layer" in p for p in layer_violations("coefficient_file", file_to_sun))
+    js_to_dispatch = "def f():\n    from skysh import export\n    return export\n"
+    assert any("not a lower layer" in p for p in layer_violations("export_js", js_to_dispatch))
     type_only = "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from skysh.runtime import SkySH\n"
     assert layer_violations("hazel", type_only) == []
 

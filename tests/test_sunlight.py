@@ -1,13 +1,13 @@
 """
-Tests of :mod:`skysh.sunlight`
-==============================
+Tests of :mod:`skysh.sunlight` and :mod:`skysh.sun_table`
+=========================================================
 
 The runtime's sun, from the shipped file's sun table, against the spectral
 model it was fitted to (:mod:`skysh.solar`: Preetham's appendix integrated
 against colour-science's CIE 1931 observer, independent of the fit) at points
 the fit never saw, with a negative control (a table changed by 1e-3 in one
 coefficient must fail the same comparison). Also: the table's variables
-against :func:`skysh.solar.relative_optical_mass`, the recorded XYZ -> RGB
+(:mod:`skysh.sun_table`) against :func:`skysh.solar.relative_optical_mass`, the recorded XYZ -> RGB
 matrix against colour-science's, batch against scalar (and a hypothesis
 property over the domain), shapes, refusals naming the parameter, the horizon
 (tiny, finite), the bound that keeps every value finite, the direction of
@@ -34,7 +34,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from skysh import coefficient_file as cf
-from skysh import solar, sunlight
+from skysh import solar, sun_table
 from skysh.sunlight import SunLight
 
 SUN_RTOL: float = 1e-4
@@ -61,7 +61,7 @@ DIRECTION_ATOL: float = 4 * float(np.finfo(np.float64).eps)
 """Direction vs skysh.solar.sun_direction: the same sines and cosines, maybe in another order."""
 
 KASTEN_DIP_MAX: float = 1e-7
-"""Kasten's formula dips below m(0) near the zenith (documented in skysh.sunlight): by 7.5e-8 on the
+"""Kasten's formula dips below m(0) near the zenith (documented in skysh.sun_table): by 7.5e-8 on the
 test's grid; the check shows the dip is there (so the clamp matters) and stays that small."""
 
 AFFINE_ATOL: float = 1e-14
@@ -121,31 +121,31 @@ def _errors(sun: SunLight, ts: np.ndarray, t: np.ndarray) -> tuple[float, float]
 # --------------------------------------------------------------------------- #
 class TestVariables:
     def test_air_mass_constants_are_solars(self) -> None:
-        assert sunlight.SUN_AIR_MASS_COEFFICIENTS == solar.KASTEN_COEFFICIENTS
-        np.testing.assert_allclose(sunlight.SUN_AIR_MASS_RANGE, solar.relative_optical_mass([0.0, HALF_PI]),
+        assert sun_table.SUN_AIR_MASS_COEFFICIENTS == solar.KASTEN_COEFFICIENTS
+        np.testing.assert_allclose(sun_table.SUN_AIR_MASS_RANGE, solar.relative_optical_mass([0.0, HALF_PI]),
                                    rtol=AIR_MASS_RTOL, atol=0)
         ts = np.random.default_rng(3).uniform(0, HALF_PI, 1000)
-        np.testing.assert_allclose(sunlight.air_mass(ts), solar.relative_optical_mass(ts), rtol=AIR_MASS_RTOL, atol=0)
+        np.testing.assert_allclose(sun_table.air_mass(ts), solar.relative_optical_mass(ts), rtol=AIR_MASS_RTOL, atol=0)
 
     def test_file_format_records_the_same_basis(self) -> None:
         fields = next(spec for spec in cf.TABLES if spec.name == "sun").fields
-        assert fields["air_mass_range"] == list(sunlight.SUN_AIR_MASS_RANGE)
-        assert fields["basis"] == sunlight.SUN_BASIS and fields["variables"] == sunlight.SUN_VARIABLES
+        assert fields["air_mass_range"] == list(sun_table.SUN_AIR_MASS_RANGE)
+        assert fields["basis"] == sun_table.SUN_BASIS and fields["variables"] == sun_table.SUN_VARIABLES
 
     def test_variables_span_the_unit_square(self) -> None:
-        x, y = sunlight.sun_variables([0.0, HALF_PI], [2.5, 6.0])
+        x, y = sun_table.sun_variables([0.0, HALF_PI], [2.5, 6.0])
         assert x.tolist() == [-1.0, 1.0] and y.tolist() == [-1.0, 1.0]
         # Kasten's formula dips just below m(0) near the zenith (documented); x is clamped there.
         ts = np.linspace(0.0, 3e-3, 3001)
-        dip = sunlight.SUN_AIR_MASS_RANGE[0] - sunlight.air_mass(ts).min()
+        dip = sun_table.SUN_AIR_MASS_RANGE[0] - sun_table.air_mass(ts).min()
         assert 0.0 < dip < KASTEN_DIP_MAX
-        assert sunlight.sun_variables(ts, 3.0)[0].min() == -1.0
+        assert sun_table.sun_variables(ts, 3.0)[0].min() == -1.0
 
     def test_affine_in_air_mass(self) -> None:
         ts = np.random.default_rng(4).uniform(0.01, HALF_PI, 50)
         m0, m1 = solar.relative_optical_mass([0.0, HALF_PI])
         expected = 2.0 * (solar.relative_optical_mass(ts) - m0) / (m1 - m0) - 1.0
-        np.testing.assert_allclose(sunlight.sun_variables(ts, 3.0)[0], expected, rtol=0, atol=AFFINE_ATOL)
+        np.testing.assert_allclose(sun_table.sun_variables(ts, 3.0)[0], expected, rtol=0, atol=AFFINE_ATOL)
 
 
 class TestAgainstTheSpectralModel:
@@ -279,7 +279,7 @@ class TestRefusals:
     def test_bound_keeps_values_finite(self, sky_table: cf.SkyTable) -> None:
         """Channel sums at SUN_MAX_LN (accepted) and matrix entries at MAX_MATRIX_ENTRY: still finite everywhere."""
         for sign in (1.0, -1.0):
-            table = np.full((91, 1, 3), sign * sunlight.SUN_MAX_LN / 91)
+            table = np.full((91, 1, 3), sign * sun_table.SUN_MAX_LN / 91)
             metadata = {"tables": {"sun": {"rgb_from_xyz": [[cf.MAX_MATRIX_ENTRY] * 3] * 3}}}
             extreme = SunLight(cf.SkyTable(sky_table.table, sky_table.degrees, metadata,
                                            {"sun": cf.NamedTable(table, np.array([[12, 6]]))}))

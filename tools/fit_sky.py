@@ -57,7 +57,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import skysh  # noqa: E402
-from skysh import coefficient_file, files, fit, irradiance_fit, sh, sunlight  # noqa: E402
+from skysh import coefficient_file, files, fit, irradiance_fit, sh, sun_table  # noqa: E402
 from skysh._version import __version__  # noqa: E402
 
 QUICK_GRID = (16, 8)
@@ -164,7 +164,7 @@ def print_sun(sky_table: coefficient_file.SkyTable) -> None:
         return
     errors = block["errors"]
     print(f"\nsun table (ln XYZ, degrees {block['degrees'][0]}, condition number {block['condition_number']:.3g}, largest "
-          f"channel sum of |coefficients| {block['largest_abs_sum']:.3g}, file bound {sunlight.SUN_MAX_LN:g}): held-out "
+          f"channel sum of |coefficients| {block['largest_abs_sum']:.3g}, file bound {sun_table.SUN_MAX_LN:g}): held-out "
           f"errors on {errors['held_out_points']} points ({block['held_out']['kinds']})")
     print(f"definition: {errors['definition']}")
     print("| sun table | X | Y | Z | R | G | B | worst | goal |")
