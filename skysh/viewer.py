@@ -520,12 +520,16 @@ class _Server(http.server.ThreadingHTTPServer):
             if self._stopping.is_set():
                 self.shutdown_request(request)
                 return
+        name = f"{CONNECTION_THREAD}:{self.server_address[1]}"
+        thread = threading.Thread(target=self._handle, args=(request, client_address), name=name, daemon=True)
         try:
-            name = f"{CONNECTION_THREAD}:{self.server_address[1]}"
-            threading.Thread(target=self._handle, args=(request, client_address), name=name, daemon=True).start()
-        except BaseException:
+            thread.start()  # from here the thread owns the slot (its _handle releases it)
+        except RuntimeError:  # "can't start new thread": it never ran, so the slot is still ours
             self._slots.release()
             raise
+        # A KeyboardInterrupt (Ctrl-C) can arrive while start() waits for the thread to begin: the thread may
+        # already run and will release its slot, so it is not released here (that released it twice, and the
+        # ValueError hid the Ctrl-C: the server kept running).
 
     def _handle(self, request: Any, client_address: Any) -> None:
         try:

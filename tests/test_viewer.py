@@ -936,6 +936,35 @@ def _disconnect_early(srv: Any, handled: threading.Semaphore, read_first: bool) 
     assert handled.acquire(timeout=DEADLINE_S)
 
 
+def test_ctrl_c_while_a_connection_thread_starts(sky: SkySH, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Ctrl-C arriving while the accept loop waits in Thread.start() (the thread already running) stops the server:
+    the KeyboardInterrupt comes through, and the slot is released once, by the thread (releasing it there too
+    raised "Semaphore released too many times", which hid the Ctrl-C: seen once in CI as a hung `skysh view`)."""
+    server = viewer.make_server(sky=sky, timeout=0.5, max_connections=1)
+    real_start = threading.Thread.start
+
+    def start_then_interrupt(thread: threading.Thread) -> None:  # the worst order: the thread is done first
+        real_start(thread)
+        thread.join(timeout=DEADLINE_S)
+        raise KeyboardInterrupt
+
+    try:
+        with socket.create_connection(server.server_address[:2], timeout=DEADLINE_S) as client:
+            client.sendall(b"GET / HTTP/1.0\r\nHost: 127.0.0.1\r\n\r\n")
+            request, address = server.socket.accept()
+            monkeypatch.setattr(threading.Thread, "start", start_then_interrupt)
+            with pytest.raises(KeyboardInterrupt):
+                server.process_request(request, address)
+            monkeypatch.undo()
+            assert client.recv(12).startswith(b"HTTP/1.0 200")
+        slots = server._slots  # type: ignore[attr-defined]
+        assert slots.acquire(timeout=DEADLINE_S)  # the thread gave its slot back...
+        assert not slots.acquire(blocking=False)  # ...once: the bound is still 1
+        slots.release()
+    finally:
+        server.server_close()
+
+
 def test_early_disconnect_prints_no_traceback(sky: SkySH, capfd: pytest.CaptureFixture[str]) -> None:
     with _running(sky) as srv:  # the default timeout: no connection times out while the client is slow to act
         handled = _handled(srv)
