@@ -42,6 +42,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_runtime import interleaved_best
 
 from skysh import runtime
+from skysh.domain import SKY
 from skysh.preetham import luminance_scale_unchecked
 
 AGREEMENT: float = 1e-13
@@ -136,21 +137,22 @@ def main(argv: list[str] | None = None) -> int:
         plan = sky.plan(bands, True)
         nx, ny = plan.split[0], plan.split[1] - plan.split[0]
         table, gather, rot = plan.half_table, plan.gather, plan.rot_index
+        (z0, z1), (t0, t1) = SKY.x.interval, SKY.y.interval
 
         def compiled_one(ts_: float, t_: float, phi_: float) -> np.ndarray:
             # The runtime's own validation and argument reduction, then one compiled call.
-            if not (0.0 <= ts_ <= math.pi / 2 and 2.5 <= t_ <= 6.0 and math.isfinite(phi_)):
+            if not (z0 <= ts_ <= z1 and t0 <= t_ <= t1 and math.isfinite(phi_)):
                 raise ValueError("out of domain")
-            x = ts_ * runtime.X_SCALE - runtime.X_SHIFT
-            y = math.log(t_) * runtime.Y_SCALE - runtime.Y_SHIFT
+            x = ts_ * SKY.x.scale - SKY.x.shift
+            y = math.log(t_) * SKY.y.scale - SKY.y.shift
             out = np.empty((bands * bands, 3))
             evaluate(table, gather, rot, nx, ny, bands, math.acos(min(x, 1.0)), math.acos(max(-1.0, min(y, 1.0))),
                      math.fmod(phi_, 2 * math.pi), luminance_scale_unchecked(ts_, t_), out)
             return out
 
         def compiled_many() -> np.ndarray:
-            x = np.clip(ts * runtime.X_SCALE - runtime.X_SHIFT, -1.0, 1.0)
-            y = np.clip(np.log(tu) * runtime.Y_SCALE - runtime.Y_SHIFT, -1.0, 1.0)
+            x = np.clip(ts * SKY.x.scale - SKY.x.shift, -1.0, 1.0)
+            y = np.clip(np.log(tu) * SKY.y.scale - SKY.y.shift, -1.0, 1.0)
             out = np.empty((args.batch, bands * bands, 3))
             evaluate_many(table, gather, rot, nx, ny, bands, np.arccos(x), np.arccos(y), np.fmod(phi, 2 * math.pi),
                           luminance_scale_unchecked(ts, tu, np), out)

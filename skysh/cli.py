@@ -327,35 +327,32 @@ def _sun_angles(args: argparse.Namespace) -> _Sun:
         return _Sun(math.degrees(zenith), math.degrees(azimuth), record, given=False)
     if args.sun_zenith is None:
         raise _UsageError("give --sun-zenith (and --sun-azimuth) or --lat/--lon/--time")
-    from skysh.poly import SUN_ZENITH_DOMAIN
+    from skysh.domain import SKY
 
-    low, high = (math.degrees(v) for v in SUN_ZENITH_DOMAIN)
+    low, high = (math.degrees(v) for v in SKY.x.interval)
     if not low <= args.sun_zenith <= high:
         raise _UsageError(f"--sun-zenith must lie in {_sun_zenith_range()} degrees, got {number_text(args.sun_zenith)}")
     return _Sun(args.sun_zenith, 0.0 if args.sun_azimuth is None else args.sun_azimuth, {}, given=True)
 
 
 def _turbidity_range() -> str:
-    """The fitted turbidity domain as help text, "[low, high]" (from :data:`skysh.poly.TURBIDITY_DOMAIN`)."""
-    from skysh._checks import interval_text
-    from skysh.poly import TURBIDITY_DOMAIN
+    """The fitted turbidity domain as help text, "[2.5, 6]" (:data:`skysh.domain.SKY`)."""
+    from skysh.domain import SKY
 
-    return interval_text(*TURBIDITY_DOMAIN)
+    return SKY.y.interval_text()
 
 
 def _sun_zenith_range() -> str:
-    """The fitted sun-zenith domain in degrees as help text, "[0, 90]" (:data:`skysh.poly.SUN_ZENITH_DOMAIN`)."""
-    from skysh._checks import interval_text
-    from skysh.poly import SUN_ZENITH_DOMAIN
+    """The fitted sun-zenith domain in degrees as help text, "[0, 90]" (:data:`skysh.domain.SKY`)."""
+    from skysh.domain import SKY
 
-    low, high = SUN_ZENITH_DOMAIN
-    return interval_text(math.degrees(low), math.degrees(high))
+    return SKY.x.interval_text(degrees=True)
 
 
 def _check_turbidity(turbidity: float) -> None:
-    from skysh.poly import TURBIDITY_DOMAIN
+    from skysh.domain import SKY
 
-    low, high = TURBIDITY_DOMAIN
+    low, high = SKY.y.interval
     if not low <= turbidity <= high:
         raise _UsageError(f"--turbidity must lie in {_turbidity_range()} (the fitted domain), got {number_text(turbidity)}")
 

@@ -32,7 +32,7 @@ content has exactly one file:
 ``table.npy``, ``degrees.npy`` (the sky)
     '<f8' (n_terms, bands (bands + 1) / 2, 3): Chebyshev coefficients of every
     m >= 0 SH coefficient of every RGB channel over the luminance scale
-    (:data:`BASIS`), terms in :data:`TERM_ORDER` for the largest degrees of any
+    (:data:`BASIS`), terms in :data:`skysh.domain.TERM_ORDER` for the largest degrees of any
     band; '<i8' (bands, 2): each band's (d_theta, d_tau), terms above them zero
     in its rows. The sky with its sun at azimuth 0 is even in azimuth: its
     m < 0 coefficients are zero, not stored; the runtime's rotation (eq. 4)
@@ -93,12 +93,13 @@ from skysh import _npz, files, poly
 from skysh._checks import check_count
 from skysh._npz import CoefficientFileError
 from skysh._version import __version__
-from skysh.sun_table import SUN_AIR_MASS_RANGE, SUN_BASIS, SUN_MAX_LN, SUN_UNITS, SUN_VARIABLES
+from skysh.domain import SKY, SUN, TERM_ORDER
+from skysh.sun_table import SUN_BASIS, SUN_MAX_LN, SUN_UNITS, SUN_VARIABLES
 
 __all__ = [
     "FORMAT", "FORMAT_VERSION", "RETIRED_VERSIONS", "DEFAULT_FILE_NAME", "MAX_FILE_BANDS", "MAX_FILE_DEGREE",
     "MAX_TABLE_MAGNITUDE", "MAX_METADATA_BYTES", "MAX_MATRIX_ENTRY", "MAX_MEMBER_BYTES", "MAX_FILE_BYTES", "MEMBERS",
-    "REQUIRED_MEMBERS", "FILE_COLOURSPACES", "BASIS", "IRRADIANCE_BASIS", "TERM_ORDER", "DOMAIN", "HASH_KEY", "RUNTIME_FIELDS",
+    "REQUIRED_MEMBERS", "FILE_COLOURSPACES", "BASIS", "IRRADIANCE_BASIS", "DOMAIN", "HASH_KEY", "RUNTIME_FIELDS",
     "TABLES", "CoefficientFileError", "TableSpec", "NamedTable", "SkyTable", "zonal_half_layout", "content_sha256",
     "default_path", "read", "write",
 ]
@@ -159,11 +160,9 @@ IRRADIANCE_BASIS: str = (
 )
 """The irradiance table's form: the sky table's (:data:`BASIS`) times the clamped-cosine factor A_l."""
 
-TERM_ORDER: str = "i (d_tau + 1) + j for the largest degrees of any band"
-"""Order of every table's terms (skysh.poly.term_index)."""
-
-DOMAIN: dict[str, list[float]] = {"sun_zenith": list(poly.SUN_ZENITH_DOMAIN), "turbidity": list(poly.TURBIDITY_DOMAIN)}
-"""The fitted domain the runtime's variables assume (radians; turbidity)."""
+DOMAIN: dict[str, list[float]] = SKY.metadata()
+"""The fitted domain the runtime's variables assume (radians; turbidity), as the file records it
+(:meth:`skysh.domain.Domain.metadata` of :data:`skysh.domain.SKY`; the sun table's is the same)."""
 
 HASH_KEY: str = "content_sha256"
 """Metadata key of the content hash (:func:`content_sha256`)."""
@@ -206,7 +205,7 @@ class TableSpec:
 TABLES: tuple[TableSpec, ...] = (
     TableSpec(
         name="sun", required=True, groups=(1, 1),
-        fields={"air_mass_range": list(SUN_AIR_MASS_RANGE), "basis": SUN_BASIS, "domain": DOMAIN,
+        fields={"air_mass_range": list(SUN.x.fitted), "basis": SUN_BASIS, "domain": DOMAIN,
                 "term_order": TERM_ORDER, "units": SUN_UNITS, "variables": SUN_VARIABLES},
         max_magnitude=SUN_MAX_LN, max_abs_sum=SUN_MAX_LN, bound_name="SUN_MAX_LN", matrices=("rgb_from_xyz",),
     ),
@@ -373,7 +372,7 @@ def _check_runtime_metadata(metadata: dict[str, Any], sky: SkyTable, required: b
 @dataclass(frozen=True)
 class NamedTable:
     """One named table besides the sky's (:data:`TABLES` says what each means): ``table`` (n_terms, rows, 3)
-    Chebyshev coefficients in :data:`TERM_ORDER`; ``degrees`` (groups, 2) per-group (d_x, d_y) in [0, 31]."""
+    Chebyshev coefficients in :data:`skysh.domain.TERM_ORDER`; ``degrees`` (groups, 2) per-group (d_x, d_y) in [0, 31]."""
 
     table: NDArray[np.float64]
     degrees: NDArray[np.int64]
@@ -654,7 +653,7 @@ def write(path: str | os.PathLike, sky_table: SkyTable) -> Path:
 
     The metadata is stored with the :data:`RUNTIME_FIELDS` this skysh assumes
     filled in where absent (colourspace sRGB, :data:`DOMAIN`, :data:`BASIS`,
-    :data:`TERM_ORDER`, the degrees and band count, and a block per named
+    :data:`skysh.domain.TERM_ORDER`, the degrees and band count, and a block per named
     table with its :attr:`TableSpec.fields`, degrees and the colourspace) and
     refused where they disagree, then hashed (:func:`content_sha256`). The
     bytes are checked by :func:`read`'s own decoder, written to a temporary

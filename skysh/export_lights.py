@@ -69,9 +69,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from skysh import coefficient_file, ground, lights, poly, preetham, solar, sunlight
+from skysh import coefficient_file, ground, lights, preetham, solar, sunlight
 from skysh._checks import check_bands, check_choice, check_scalar
-from skysh.sun_table import SUN_AIR_MASS_COEFFICIENTS, SUN_AIR_MASS_RANGE
+from skysh.domain import KASTEN_COEFFICIENTS, SUN, term_index
 
 __all__ = [
     "FLOAT32_MAX", "TABLE_LANGUAGES", "ZENITH_CONSTANTS", "BY_INTENT", "LightTables", "light_tables", "light_flags",
@@ -145,7 +145,7 @@ def chebyshev_terms(table: ArrayLike, max_degrees: tuple[int, int], degrees: tup
     table
         (n_terms, rows, 3): a :class:`skysh.coefficient_file.SkyTable`'s or
         :class:`~skysh.coefficient_file.NamedTable`'s ``table``, terms in
-        :func:`skysh.poly.term_index` order for ``max_degrees``.
+        :func:`skysh.domain.term_index` order for ``max_degrees``.
     max_degrees, degrees
         (d_x, d_y) of the table's layout and of the export, each in [0, 31].
 
@@ -158,7 +158,7 @@ def chebyshev_terms(table: ArrayLike, max_degrees: tuple[int, int], degrees: tup
     out = np.zeros((degrees[0] + 1, degrees[1] + 1) + values.shape[1:])
     for i in range(min(degrees[0], max_degrees[0]) + 1):
         for j in range(min(degrees[1], max_degrees[1]) + 1):
-            out[i, j] = values[poly.term_index(i, j, max_degrees)]
+            out[i, j] = values[term_index(i, j, max_degrees)]
     return out
 
 
@@ -523,11 +523,10 @@ def light_tables(sky: Any, bands: int, degrees: tuple[int, int]) -> LightTables:
     c10 = np.zeros((dx + 1, dy + 1, 3))
     if has_ground:  # the sky's unfiltered (1, 0), at the export's terms
         c10 = chebyshev_terms(table.table[:, 1:2], table.max_degrees, degrees)[:, :, 0]
-    (a, b, c), (m0, m1) = SUN_AIR_MASS_COEFFICIENTS, SUN_AIR_MASS_RANGE
-    t_low, t_high = poly.TURBIDITY_DOMAIN
+    a, b, c = KASTEN_COEFFICIENTS  # the sun table's map (skysh.domain.SUN): x = (m - m0) sx_scale - 1, y likewise
     constants = {
-        "am_a": a, "am_b": b, "am_neg_c": -c, "deg": 180.0 / math.pi, "m0": m0, "sx_scale": 2.0 / (m1 - m0),
-        "sun_tmin": t_low, "sy_scale": 2.0 / (t_high - t_low), "hf": ground.HORIZONTAL_FACTOR, "inv_pi": 1.0 / math.pi,
+        "am_a": a, "am_b": b, "am_neg_c": -c, "deg": 180.0 / math.pi, "m0": SUN.x.origin, "sx_scale": SUN.x.scale,
+        "sun_tmin": SUN.y.origin, "sy_scale": SUN.y.scale, "hf": ground.HORIZONTAL_FACTOR, "inv_pi": 1.0 / math.pi,
         "clamp": lights.SUN_SH_CLAMP,
     }
     return LightTables(

@@ -16,7 +16,6 @@ Every language of :mod:`skysh.export` (C, GLSL, HLSL) and of :mod:`skysh.export_
 
 from __future__ import annotations
 
-import math
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -24,8 +23,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from skysh import coefficient_file, engines, poly, runtime, sh
+from skysh import coefficient_file, engines, runtime, sh
 from skysh._checks import check_bands
+from skysh.domain import SKY
 from skysh.export_lights import LightTables, chebyshev_terms, light_tables
 
 __all__ = ["ExportTables", "export_tables", "ENGINE_ZERO", "ENGINE_UNIT", "EnginePlan", "engine_plan"]
@@ -86,12 +86,10 @@ def export_tables(sky: runtime.SkySH, bands: int = 3) -> ExportTables:
     layout = coefficient_file.zonal_half_layout(bands)
     table = chebyshev_terms(sky.table.table[:, : len(layout)], sky.table.max_degrees, (dx, dy))
     irradiance = None if named is None else chebyshev_terms(named.table, named.max_degrees, (dx, dy))
-    (z0, z1), (t0, t1) = poly.SUN_ZENITH_DOMAIN, poly.TURBIDITY_DOMAIN
-    l0, l1 = math.log(t0), math.log(t1)
     return ExportTables(
         bands=bands, degrees=(dx, dy), table=table, half_layout=layout, gibbs=runtime.gibbs_factors(bands),
-        lobe=sh.cosine_lobe(bands), x_scale=2.0 / (z1 - z0), x_shift=(z0 + z1) / (z1 - z0), y_scale=2.0 / (l1 - l0),
-        y_shift=(l0 + l1) / (l1 - l0), sun_zenith_domain=(z0, z1), turbidity_domain=(t0, t1),
+        lobe=sh.cosine_lobe(bands), x_scale=SKY.x.scale, x_shift=SKY.x.shift, y_scale=SKY.y.scale,
+        y_shift=SKY.y.shift, sun_zenith_domain=SKY.x.interval, turbidity_domain=SKY.y.interval,
         lights=light_tables(sky, bands, (dx, dy)), irradiance=irradiance,
     )
 

@@ -59,7 +59,8 @@ from numpy.typing import NDArray
 from skysh import coefficient_file, poly, preetham, sh
 from skysh._checks import MAX_ARRAY_ELEMENTS, check_count, check_flag, check_seed
 from skysh.coefficient_file import NamedTable, SkyTable, zonal_half_layout
-from skysh.sun_table import SUN_AIR_MASS_RANGE, air_mass, sun_variables
+from skysh.domain import SKY, SUN, TERM_ORDER
+from skysh.sun_table import air_mass, sun_variables
 
 __all__ = [
     "LMIN_FLOOR",
@@ -138,8 +139,8 @@ def chebyshev_grid(grid: tuple[int, int]) -> tuple[NDArray, NDArray]:
         x = -np.cos((2 * k + 1) * math.pi / (2 * n))
         return lo + (hi - lo) * 0.5 * (x + 1.0)
 
-    ts = nodes(grid[0], *poly.SUN_ZENITH_DOMAIN)
-    tu = nodes(grid[1], *poly.TURBIDITY_DOMAIN)
+    ts = nodes(grid[0], *SKY.x.interval)
+    tu = nodes(grid[1], *SKY.y.interval)
     a, b = np.meshgrid(ts, tu, indexing="ij")
     return a.ravel(), b.ravel()
 
@@ -149,11 +150,11 @@ def held_out_points(count: int, seed: int, corners: bool = True) -> tuple[NDArra
     count = check_count(count, "count", 0, MAX_ARRAY_ELEMENTS)
     rng = np.random.default_rng(check_seed(seed, "seed"))
     corners = check_flag(corners, "corners")
-    ts = rng.uniform(*poly.SUN_ZENITH_DOMAIN, size=count)
-    tu = rng.uniform(*poly.TURBIDITY_DOMAIN, size=count)
+    ts = rng.uniform(*SKY.x.interval, size=count)
+    tu = rng.uniform(*SKY.y.interval, size=count)
     if corners:
-        ts = np.concatenate([ts, np.repeat(poly.SUN_ZENITH_DOMAIN, 2)])
-        tu = np.concatenate([tu, np.tile(poly.TURBIDITY_DOMAIN, 2)])
+        ts = np.concatenate([ts, np.repeat(SKY.x.interval, 2)])
+        tu = np.concatenate([tu, np.tile(SKY.y.interval, 2)])
     return ts, tu
 
 
@@ -161,7 +162,7 @@ def edge_points(per_edge: int, seed: int) -> tuple[NDArray, NDArray]:
     """``per_edge`` uniform random points on each of the domain's four edges (seeded)."""
     per_edge = check_count(per_edge, "per_edge", 0, MAX_ARRAY_ELEMENTS // 4)
     u = np.random.default_rng(check_seed(seed, "seed")).uniform(0.0, 1.0, (4, per_edge))
-    (lo_s, hi_s), (lo_t, hi_t) = poly.SUN_ZENITH_DOMAIN, poly.TURBIDITY_DOMAIN
+    (lo_s, hi_s), (lo_t, hi_t) = SKY.x.interval, SKY.y.interval
     ts = np.concatenate([lo_s + (hi_s - lo_s) * u[0], lo_s + (hi_s - lo_s) * u[1],
                          np.full(per_edge, lo_s), np.full(per_edge, hi_s)])
     tu = np.concatenate([np.full(per_edge, lo_t), np.full(per_edge, hi_t),
@@ -407,7 +408,7 @@ def _sky_metadata(settings: FitSettings, degrees: NDArray, tolerance: float | No
         "colourspace": settings.colourspace,
         "domain": coefficient_file.DOMAIN,
         "basis": coefficient_file.BASIS,
-        "term_order": coefficient_file.TERM_ORDER,
+        "term_order": TERM_ORDER,
         "degrees": degrees.tolist(),
         "bands": int(degrees.shape[0]),
         "requested_degrees": list(settings.degrees),
@@ -554,7 +555,7 @@ def zenith_of_air_mass(m: NDArray) -> NDArray[np.float64]:
     that range the largest solution is returned (the air mass, all that matters, is ``m``).
     """
     m = np.asarray(m, dtype=np.float64)
-    lo, hi = np.zeros_like(m), np.full_like(m, poly.SUN_ZENITH_DOMAIN[1])
+    lo, hi = np.zeros_like(m), np.full_like(m, SKY.x.interval[1])
     for _ in range(64):
         mid = 0.5 * (lo + hi)
         below = air_mass(mid) < m
@@ -564,8 +565,7 @@ def zenith_of_air_mass(m: NDArray) -> NDArray[np.float64]:
 
 def _from_variables(x: NDArray, y: NDArray) -> tuple[NDArray, NDArray]:
     """(sun zenith, turbidity) of the sun table's variables x, y in [-1, 1]."""
-    m0, m1 = SUN_AIR_MASS_RANGE
-    (t0, t1) = poly.TURBIDITY_DOMAIN
+    (m0, m1), (t0, t1) = SUN.x.fitted, SUN.y.interval
     return zenith_of_air_mass(m0 + 0.5 * (x + 1.0) * (m1 - m0)), t0 + 0.5 * (y + 1.0) * (t1 - t0)
 
 
@@ -587,7 +587,7 @@ def sun_held_out_points(count: int, seed: int) -> tuple[NDArray, NDArray]:
     rng = np.random.default_rng(seed + 3)  # another stream: not the zeniths above in another variable
     mx, mt = _from_variables(rng.uniform(-1.0, 1.0, count), rng.uniform(-1.0, 1.0, count))
     es, et = edge_points(count // 8, seed + 1)
-    cs, ct = np.repeat(poly.SUN_ZENITH_DOMAIN, 2), np.tile(poly.TURBIDITY_DOMAIN, 2)
+    cs, ct = np.repeat(SKY.x.interval, 2), np.tile(SKY.y.interval, 2)
     return np.concatenate([ts, mx, es, cs]), np.concatenate([tu, mt, et, ct])
 
 

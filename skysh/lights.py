@@ -73,7 +73,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from skysh import coefficient_file, ground, poly, sh
+from skysh import coefficient_file, ground, sh
 from skysh._checks import (
     as_float_array,
     check_bands,
@@ -81,8 +81,8 @@ from skysh._checks import (
     number_text,
     short_repr,
 )
+from skysh.domain import KASTEN_COEFFICIENTS, SUN
 from skysh.preetham import luminance_scale_unchecked
-from skysh.sun_table import SUN_AIR_MASS_COEFFICIENTS, SUN_AIR_MASS_RANGE
 
 __all__ = ["SUN_SH_CLAMP", "ALBEDO_RANGE", "check_albedo", "sun_trig_matrix", "ground_zonal", "LitPlan"]
 
@@ -103,11 +103,9 @@ exact value."""
 _TWO_PI: float = 2.0 * math.pi
 _INV_PI: float = 1.0 / math.pi
 _HF: float = ground.HORIZONTAL_FACTOR
-_A, _B, _NEG_C = SUN_AIR_MASS_COEFFICIENTS[0], SUN_AIR_MASS_COEFFICIENTS[1], -SUN_AIR_MASS_COEFFICIENTS[2]
-_M0: float = SUN_AIR_MASS_RANGE[0]
-_SX_SCALE: float = 2.0 / (SUN_AIR_MASS_RANGE[1] - SUN_AIR_MASS_RANGE[0])
-_SY_SCALE: float = 2.0 / (poly.TURBIDITY_DOMAIN[1] - poly.TURBIDITY_DOMAIN[0])
-_TMIN: float = poly.TURBIDITY_DOMAIN[0]
+_A, _B, _NEG_C = KASTEN_COEFFICIENTS[0], KASTEN_COEFFICIENTS[1], -KASTEN_COEFFICIENTS[2]
+# The sun table's map (skysh.domain.SUN) as floats: x_s = (m - _M0) _SX_SCALE - 1, y_s = (T - _TMIN) _SY_SCALE - 1.
+_M0, _SX_SCALE, _TMIN, _SY_SCALE = SUN.x.origin, SUN.x.scale, SUN.y.origin, SUN.y.scale
 _DEG: float = 180.0 / math.pi
 
 

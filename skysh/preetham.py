@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from skysh import poly, sh
+from skysh import sh
 from skysh._checks import (
     MAX_ARRAY_ELEMENTS,
     as_float_array,
@@ -56,6 +56,7 @@ from skysh._checks import (
     check_size,
     short_repr,
 )
+from skysh.domain import SKY
 
 __all__ = [
     "SUN_ZENITH_RANGE",
@@ -84,9 +85,9 @@ __all__ = [
     "import_colour",
 ]
 
-SUN_ZENITH_RANGE: tuple[float, float] = poly.SUN_ZENITH_DOMAIN
+SUN_ZENITH_RANGE: tuple[float, float] = SKY.x.interval
 """Domain of the sun zenith angle, radians (the model is undefined below the horizon): the
-interval the fit covers too, written once in :data:`skysh.poly.SUN_ZENITH_DOMAIN`."""
+interval the fit covers too, written once in :data:`skysh.domain.SKY`."""
 
 TURBIDITY_RANGE: tuple[float, float] = (1.7, 10.0)
 """Domain of the turbidity accepted by the model (unreliable below about 2)."""

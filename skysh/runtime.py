@@ -57,27 +57,19 @@ from skysh._checks import (
     check_range,
     check_scalar,
     check_size,
-    number_text,
     real_scalar,
     short_repr,
 )
+from skysh.domain import SKY
 from skysh.preetham import luminance_scale_unchecked as _luminance_scale
 from skysh.sunlight import SunLight
 
-__all__ = ["SkySH", "gibbs_factors", "X_SCALE", "X_SHIFT", "Y_SCALE", "Y_SHIFT"]
+__all__ = ["SkySH", "gibbs_factors"]
 
-X_SCALE: float = 2.0 / (poly.SUN_ZENITH_DOMAIN[1] - poly.SUN_ZENITH_DOMAIN[0])
-X_SHIFT: float = (poly.SUN_ZENITH_DOMAIN[0] + poly.SUN_ZENITH_DOMAIN[1]) / (
-    poly.SUN_ZENITH_DOMAIN[1] - poly.SUN_ZENITH_DOMAIN[0]
-)
-"""X_SCALE, X_SHIFT: sun zenith (rad) -> Chebyshev variable x = zenith X_SCALE - X_SHIFT in [-1, 1]."""
-_LOG_T: tuple[float, float] = (math.log(poly.TURBIDITY_DOMAIN[0]), math.log(poly.TURBIDITY_DOMAIN[1]))
-Y_SCALE: float = 2.0 / (_LOG_T[1] - _LOG_T[0])
-Y_SHIFT: float = (_LOG_T[0] + _LOG_T[1]) / (_LOG_T[1] - _LOG_T[0])
-"""Y_SCALE, Y_SHIFT: turbidity -> Chebyshev variable y = ln(T) Y_SCALE - Y_SHIFT in [-1, 1]."""
-_ZMIN, _ZMAX = poly.SUN_ZENITH_DOMAIN
+# The fitted domain (skysh.domain.SKY) as floats for the scalar fast path: x = zenith _XS - _XH, y = ln(T) _YS - _YH.
+_XS, _XH, _YS, _YH = SKY.x.scale, SKY.x.shift, SKY.y.scale, SKY.y.shift
+(_ZMIN, _ZMAX), (_TMIN, _TMAX) = SKY.x.interval, SKY.y.interval
 _TWO_PI: float = 2.0 * math.pi
-_TMIN, _TMAX = poly.TURBIDITY_DOMAIN
 
 
 def gibbs_factors(bands: int) -> NDArray[np.float64]:
@@ -113,9 +105,9 @@ def _rotation_factors(phi: NDArray[np.float64], bands: int) -> NDArray[np.float6
 
 
 def _terms(table: NDArray[np.float64], top: tuple[int, int], degrees: tuple[int, int]) -> NDArray[np.float64]:
-    """(T, rows, 3): the terms of ``degrees`` (:func:`skysh.poly.term_index` order) of a table laid out for ``top``,
+    """(T, rows, 3): the terms of ``degrees`` (:func:`skysh.domain.term_index` order) of a table laid out for ``top``,
     zero above its own degrees (a copy)."""
-    i, j = np.divmod(np.arange((degrees[0] + 1) * (degrees[1] + 1)), degrees[1] + 1)
+    i, j = np.divmod(np.arange(poly.n_terms(degrees)), degrees[1] + 1)  # inverse of skysh.domain.term_index
     inside = (i <= top[0]) & (j <= top[1])
     out = np.zeros((i.size,) + table.shape[1:])
     out[inside] = table[i[inside] * (top[1] + 1) + j[inside]]
@@ -368,8 +360,8 @@ class SkySH:
         # Every per-call factor in one vectorised cos: the Chebyshev terms T_k(x) =
         # cos(k acos x) of both variables and the rotation factors cos(m phi) and
         # sin(m phi) = cos(m phi - pi/2). Error <= k^2 eps, far below the fit's.
-        x = ts * X_SCALE - X_SHIFT
-        y = math.log(t) * Y_SCALE - Y_SHIFT
+        x = ts * _XS - _XH
+        y = math.log(t) * _YS - _YH
         # Clamp what rounding may push past +-1 at the domain's edges (x >= -1 holds exactly).
         angles = (math.acos(x if x < 1.0 else 1.0), math.acos(y if -1.0 < y < 1.0 else math.copysign(1.0, y)), phi, 1.0)
         packed = np.cos(np.dot(plan.angle_map, np.array(angles)))
@@ -390,8 +382,7 @@ class SkySH:
 
     def _frames(self, sun_zenith: ArrayLike, turbidity: ArrayLike, sun_azimuth: ArrayLike) -> tuple:
         """Checked parameter arrays of a batch and their broadcast shape (not yet broadcast)."""
-        ts = check_range(sun_zenith, "sun_zenith", _ZMIN, _ZMAX, unit="rad (the fitted domain)")
-        t = check_range(turbidity, "turbidity", _TMIN, _TMAX, unit="(the fitted domain)")
+        ts, t = SKY.x.check_array(sun_zenith), SKY.y.check_array(turbidity)
         phi = check_range(sun_azimuth, "sun_azimuth", -np.inf, np.inf, unit="rad")
         try:
             shape = np.broadcast_shapes(ts.shape, t.shape, phi.shape)
@@ -472,7 +463,7 @@ class SkySH:
         if scalar:
             ts, t, phi = frame
             phi = _check_frame(ts, t, phi)
-            x, y = ts * X_SCALE - X_SHIFT, math.log(t) * Y_SCALE - Y_SHIFT
+            x, y = ts * _XS - _XH, math.log(t) * _YS - _YH
             if not dering_sky and not convert:  # the hot path: one fused evaluation, the lobe folded in
                 plan = self._lit_plans.get((bands, gibbs, table, irradiance)) if type(bands) is int else None
                 plan = self._lit_plan(bands, gibbs, table, irradiance) if plan is None else plan
@@ -630,11 +621,9 @@ def _dering(coeffs: NDArray[np.float64], target: str = "irradiance") -> NDArray[
 def _check_frame(ts: float, t: float, phi: float) -> float:
     """Refuse a scalar frame outside the fitted domain (NaN included), naming the parameter; phi mod 2 pi."""
     if not _ZMIN <= ts <= _ZMAX:  # also False for NaN
-        raise ValueError(
-            f"sun_zenith must lie in [{_ZMIN:g}, {_ZMAX:g}] rad (the fitted domain), got {number_text(ts)}"
-        )
+        raise SKY.x.error(ts)
     if not _TMIN <= t <= _TMAX:
-        raise ValueError(f"turbidity must lie in [{_TMIN:g}, {_TMAX:g}] (the fitted domain), got {number_text(t)}")
+        raise SKY.y.error(t)
     if not math.isfinite(phi):
         raise ValueError(f"sun_azimuth must be finite (radians), got {phi!r}")
     return math.fmod(phi, _TWO_PI)  # so m * phi cannot overflow

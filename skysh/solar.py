@@ -101,8 +101,9 @@ from functools import lru_cache
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from skysh import poly, sh
+from skysh import domain, sh
 from skysh._checks import as_float_array, check_bands, check_choice, check_cutoff, check_dirs, check_range, read_only
+from skysh.domain import SKY
 
 __all__ = [
     "SUN_ZENITH_RANGE", "TURBIDITY_RANGE", "SOLAR_WAVELENGTHS", "SOLAR_RADIANCE", "OZONE_WAVELENGTHS",
@@ -120,11 +121,11 @@ __all__ = [
 # --------------------------------------------------------------------------- #
 # Domain
 # --------------------------------------------------------------------------- #
-SUN_ZENITH_RANGE: tuple[float, float] = poly.SUN_ZENITH_DOMAIN
+SUN_ZENITH_RANGE: tuple[float, float] = SKY.x.interval
 """Sun zenith angles accepted, radians: [0, pi/2] (the sky's fitted domain)."""
 
-TURBIDITY_RANGE: tuple[float, float] = poly.TURBIDITY_DOMAIN
-"""Turbidities accepted: [2.5, 6] (the sky's fitted domain, ``skysh.poly.TURBIDITY_DOMAIN``)."""
+TURBIDITY_RANGE: tuple[float, float] = SKY.y.interval
+"""Turbidities accepted: [2.5, 6] (the sky's fitted domain, ``skysh.domain.SKY``)."""
 
 # --------------------------------------------------------------------------- #
 # Tables (Preetham et al. 1999 appendix, after Iqbal 1983; sources in the module docstring)
@@ -207,8 +208,8 @@ OZONE_THICKNESS: float = 0.35
 PRECIPITABLE_WATER: float = 2.0
 """Precipitable water vapour w, cm (Iqbal's standard)."""
 
-KASTEN_COEFFICIENTS: tuple[float, float, float] = (0.15, 93.885, 1.253)
-"""(a, b, c) of Kasten's air mass m = 1 / (cos theta + a (b - theta[deg])^-c)."""
+KASTEN_COEFFICIENTS: tuple[float, float, float] = domain.KASTEN_COEFFICIENTS
+"""(a, b, c) of Kasten's air mass m = 1 / (cos theta + a (b - theta[deg])^-c) (:data:`skysh.domain.KASTEN_COEFFICIENTS`)."""
 
 _MIXED_GAS: tuple[float, float, float] = (1.41, 118.93, 0.45)
 """(a, b, c) of tau_g = exp(-a k_g m / (1 + b k_g m)^c)."""

@@ -9,10 +9,10 @@ here) holds the sun's direct normal illuminance of Preetham, Shirley and Smits
 :class:`skysh.sunlight.SunLight`. This module is that table's schema, shared by
 the writer, the format and the reader:
 
--   :data:`SUN_AIR_MASS_COEFFICIENTS`, :data:`SUN_AIR_MASS_RANGE`,
-    :data:`SUN_VARIABLES`, :data:`SUN_BASIS`, :data:`SUN_UNITS`,
+-   :data:`SUN_VARIABLES`, :data:`SUN_BASIS`, :data:`SUN_UNITS`,
     :data:`SUN_MAX_LN`: the table's variables, polynomial form, units and bound,
-    as the file records them.
+    as the file records them (the domain itself, Kasten's coefficients and the
+    air-mass interval, is :data:`skysh.domain.SUN`).
 -   :func:`air_mass`, :func:`sun_variables`: the table's variables (Kasten's
     relative optical mass; the Chebyshev variables x, y) as arrays.
 
@@ -41,50 +41,25 @@ References
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from skysh import poly
-from skysh._checks import check_range
+from skysh.domain import KASTEN_COEFFICIENTS, SUN
 
 __all__ = [
-    "SUN_AIR_MASS_COEFFICIENTS", "SUN_AIR_MASS_RANGE", "SUN_VARIABLES", "SUN_BASIS", "SUN_UNITS", "SUN_MAX_LN",
+    "SUN_VARIABLES", "SUN_BASIS", "SUN_UNITS", "SUN_MAX_LN",
     "air_mass", "sun_variables",
 ]
 
-SUN_AIR_MASS_COEFFICIENTS: tuple[float, float, float] = (0.15, 93.885, 1.253)
-"""(a, b, c) of Kasten's (1966) relative optical mass m = 1 / (cos theta + a (b - theta[deg])^-c)
-(``skysh.solar.KASTEN_COEFFICIENTS``, repeated so that the runtime imports no physics; a test compares)."""
-
-_A, _B, _NEG_C = SUN_AIR_MASS_COEFFICIENTS[0], SUN_AIR_MASS_COEFFICIENTS[1], -SUN_AIR_MASS_COEFFICIENTS[2]
-_DEG: float = 180.0 / math.pi
-_ZMIN, _ZMAX = poly.SUN_ZENITH_DOMAIN
-_TMIN, _TMAX = poly.TURBIDITY_DOMAIN
-
-
-def _air_mass_scalar(sun_zenith: float) -> float:
-    return 1.0 / (math.cos(sun_zenith) + _A * (_B - sun_zenith * _DEG) ** _NEG_C)
-
-
-SUN_AIR_MASS_RANGE: tuple[float, float] = (_air_mass_scalar(_ZMIN), _air_mass_scalar(_ZMAX))
-"""(m0, m1): Kasten's m at sun zenith 0 and pi/2, 0.99949 and 36.510 (the interval of the variable x).
-
-Kasten's formula dips slightly below m0 for sun zeniths just above 0 (its
-derivative at 0 is slightly negative; by less than 1e-7, which
-``tests/test_sunlight.py`` asserts); there x is clamped to -1, which moves
-ln XYZ by less than 1e-7 (its slope in m is of order 1): far below the fit's error."""
-
-_X_SCALE: float = 2.0 / (SUN_AIR_MASS_RANGE[1] - SUN_AIR_MASS_RANGE[0])
-_Y_SCALE: float = 2.0 / (_TMAX - _TMIN)
+_A, _B, _C = KASTEN_COEFFICIENTS
+_T0, _T1 = SUN.y.interval
 
 SUN_VARIABLES: dict[str, str] = {
-    "m": "1 / (cos sun_zenith + 0.15 (93.885 - sun_zenith[deg])^-1.253) (Kasten 1966 relative optical mass)",
+    "m": f"1 / (cos sun_zenith + {_A:g} ({_B:g} - sun_zenith[deg])^-{_C:g}) (Kasten 1966 relative optical mass)",
     "x": "2 (m - m0) / (m1 - m0) - 1 clamped to [-1, 1], [m0, m1] = air_mass_range (m at sun zenith 0 and pi/2)",
-    "y": "2 (T - 2.5) / (6 - 2.5) - 1 (turbidity T, affine)",
+    "y": f"2 (T - {_T0:g}) / ({_T1:g} - {_T0:g}) - 1 (turbidity T, affine)",
 }
-"""The sun table's Chebyshev variables, as recorded in the file's metadata."""
+"""The sun table's Chebyshev variables, as recorded in the file's metadata (written from :data:`skysh.domain.SUN`)."""
 
 SUN_BASIS: str = (
     "ln XYZ_c = sum_k table[k, 0, c] T_i(x) T_j(y), k = i (d_y + 1) + j, c = X, Y, Z: CIE 1931 XYZ of the "
@@ -103,14 +78,19 @@ horizon. A fit's largest sum is far below (``tools/fit_sky.py`` prints it with t
 
 
 def air_mass(sun_zenith: ArrayLike) -> NDArray[np.float64]:
-    """Kasten's relative optical mass at ``sun_zenith`` (radians in [0, pi/2], any shape): dimensionless, 0.9995 .. 36.51."""
-    ts = check_range(sun_zenith, "sun_zenith", _ZMIN, _ZMAX, unit="rad (the fitted domain)")
-    return 1.0 / (np.cos(ts) + _A * (_B - ts * _DEG) ** _NEG_C)
+    """Kasten's relative optical mass at ``sun_zenith`` (radians in [0, pi/2], any shape): dimensionless, 0.9995 .. 36.51.
+
+    Kasten's formula (:data:`skysh.domain.KASTEN_COEFFICIENTS`) dips slightly below m(0) for sun
+    zeniths just above 0 (its derivative at 0 is slightly negative; by less than 1e-7, which
+    ``tests/test_sunlight.py`` asserts); there :func:`sun_variables` clamps x to -1, which moves
+    ln XYZ by less than 1e-7 (its slope in m is of order 1): far below the fit's error.
+    """
+    return SUN.x.fitted_value(SUN.x.check_array(sun_zenith))
 
 
 def sun_variables(sun_zenith: ArrayLike, turbidity: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """
-    The sun table's Chebyshev variables (:data:`SUN_VARIABLES`), each in [-1, 1].
+    The sun table's Chebyshev variables (:data:`SUN_VARIABLES`, :data:`skysh.domain.SUN`), each in [-1, 1].
 
     Parameters
     ----------
@@ -122,6 +102,4 @@ def sun_variables(sun_zenith: ArrayLike, turbidity: ArrayLike) -> tuple[NDArray[
     x, y
         x = 2 (m - m0) / (m1 - m0) - 1 (clamped), y = 2 (T - 2.5) / 3.5 - 1.
     """
-    m = air_mass(sun_zenith)
-    t = check_range(turbidity, "turbidity", _TMIN, _TMAX, unit="(the fitted domain)")
-    return np.clip((m - SUN_AIR_MASS_RANGE[0]) * _X_SCALE - 1.0, -1.0, 1.0), (t - _TMIN) * _Y_SCALE - 1.0
+    return SUN.unit(sun_zenith, turbidity)

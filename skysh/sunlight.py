@@ -52,26 +52,27 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from skysh import coefficient_file, poly
-from skysh._checks import as_float_array, check_range, check_size, number_text, real_scalar
+from skysh._checks import as_float_array, check_size, real_scalar
 from skysh._npz import CoefficientFileError
-from skysh.sun_table import SUN_AIR_MASS_COEFFICIENTS, SUN_AIR_MASS_RANGE, sun_variables
+from skysh.domain import KASTEN_COEFFICIENTS, SUN
+from skysh.sun_table import sun_variables
 
 __all__ = ["SunLight"]
 
-_A, _B, _NEG_C = SUN_AIR_MASS_COEFFICIENTS[0], SUN_AIR_MASS_COEFFICIENTS[1], -SUN_AIR_MASS_COEFFICIENTS[2]
+# The sun table's domain (skysh.domain.SUN) as floats for the scalar fast path:
+# x = (m - _M0) _SXS - 1 of Kasten's m, y = (T - _TMIN) _SYS - 1.
+_A, _B, _NEG_C = KASTEN_COEFFICIENTS[0], KASTEN_COEFFICIENTS[1], -KASTEN_COEFFICIENTS[2]
 _DEG: float = 180.0 / math.pi
-_ZMIN, _ZMAX = poly.SUN_ZENITH_DOMAIN
-_TMIN, _TMAX = poly.TURBIDITY_DOMAIN
-_X_SCALE: float = 2.0 / (SUN_AIR_MASS_RANGE[1] - SUN_AIR_MASS_RANGE[0])
-_Y_SCALE: float = 2.0 / (_TMAX - _TMIN)
+(_ZMIN, _ZMAX), (_TMIN, _TMAX) = SUN.x.interval, SUN.y.interval
+_M0, _SXS, _SYS = SUN.x.origin, SUN.x.scale, SUN.y.scale
 
 
 def _domain_error(ts: float, t: float) -> ValueError | None:
     """The refusal of a scalar (sun_zenith, turbidity) outside the fitted domain (NaN included), else None."""
     if not _ZMIN <= ts <= _ZMAX:
-        return ValueError(f"sun_zenith must lie in [{_ZMIN:g}, {_ZMAX:g}] rad (the fitted domain), got {number_text(ts)}")
+        return SUN.x.error(ts)
     if not _TMIN <= t <= _TMAX:
-        return ValueError(f"turbidity must lie in [{_TMIN:g}, {_TMAX:g}] (the fitted domain), got {number_text(t)}")
+        return SUN.y.error(t)
     return None
 
 
@@ -142,8 +143,8 @@ class SunLight:
     # ------------------------------------------------------------------ #
     def _ln_one(self, ts: float, t: float) -> NDArray[np.float64]:
         """ln XYZ (3,) at one checked point: arithmetic on the prepared tables only."""
-        x = (1.0 / (math.cos(ts) + _A * (_B - ts * _DEG) ** _NEG_C) - SUN_AIR_MASS_RANGE[0]) * _X_SCALE - 1.0
-        y = (t - _TMIN) * _Y_SCALE - 1.0
+        x = (1.0 / (math.cos(ts) + _A * (_B - ts * _DEG) ** _NEG_C) - _M0) * _SXS - 1.0
+        y = (t - _TMIN) * _SYS - 1.0
         # Clamp what rounding (and Kasten's dip near the zenith) pushes past +-1; T_k = cos(k acos v), error <= k^2 eps.
         angles = (math.acos(x if -1.0 < x < 1.0 else math.copysign(1.0, x)),
                   math.acos(y if -1.0 < y < 1.0 else math.copysign(1.0, y)))
@@ -153,8 +154,7 @@ class SunLight:
 
     def _ln_batch(self, sun_zenith: ArrayLike, turbidity: ArrayLike) -> tuple[NDArray[np.float64], tuple[int, ...]]:
         """ln XYZ (n, 3) at checked, broadcast points, and their broadcast shape."""
-        ts = check_range(sun_zenith, "sun_zenith", _ZMIN, _ZMAX, unit="rad (the fitted domain)")
-        t = check_range(turbidity, "turbidity", _TMIN, _TMAX, unit="(the fitted domain)")
+        ts, t = SUN.x.check_array(sun_zenith), SUN.y.check_array(turbidity)
         try:
             shape = np.broadcast_shapes(ts.shape, t.shape)
         except ValueError:
@@ -250,9 +250,9 @@ class SunLight:
             s = math.sin(ts)
             phi = math.fmod(phi, 2.0 * math.pi)
             return np.array((s * math.cos(phi), s * math.sin(phi), math.cos(ts))), rgb
-        zen = check_range(sun_zenith, "sun_zenith", _ZMIN, _ZMAX, unit="rad (the fitted domain)")
+        zen = SUN.x.check_array(sun_zenith)
         a = np.fmod(as_float_array(sun_azimuth, "sun_azimuth"), 2.0 * math.pi)
-        tu = check_range(turbidity, "turbidity", _TMIN, _TMAX, unit="(the fitted domain)")
+        tu = SUN.y.check_array(turbidity)
         try:
             zen, tu, a = np.broadcast_arrays(zen, tu, a)
         except ValueError:

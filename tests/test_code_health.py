@@ -295,12 +295,13 @@ NOT_ZENITH: re.Pattern[str] = re.compile(r"turbidity|azimuth|albedo|cos|variable
 
 def prose_domains() -> dict[str, dict[tuple[float, float], str]]:
     """The domains prose may state, by quantity: each from the constant that owns it."""
-    from skysh import hosek, poly, preetham
+    from skysh import hosek, preetham
+    from skysh.domain import SKY
 
-    zenith = {poly.SUN_ZENITH_DOMAIN: "skysh.poly.SUN_ZENITH_DOMAIN (also preetham's and hosek's SUN_ZENITH_RANGE)",
+    zenith = {SKY.x.interval: "skysh.domain.SKY.x (also preetham's and hosek's SUN_ZENITH_RANGE)",
               (0.0, math.pi): "a zenith angle's whole range (skysh.sun: the sun may be below the horizon)"}
     return {
-        "turbidity": {poly.TURBIDITY_DOMAIN: "skysh.poly.TURBIDITY_DOMAIN (the fitted domain)",
+        "turbidity": {SKY.y.interval: "skysh.domain.SKY.y (the fitted domain)",
                       preetham.TURBIDITY_RANGE: "skysh.preetham.TURBIDITY_RANGE (Preetham's model)",
                       hosek.TURBIDITY_RANGE: "skysh.hosek.TURBIDITY_RANGE (Hosek-Wilkie's model)"},
         "zenith": zenith,

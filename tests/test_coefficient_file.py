@@ -31,7 +31,8 @@ import pytest
 from conftest import canonical_json
 
 from skysh import coefficient_file as cf
-from skysh import poly, sun_table
+from skysh import sun_table
+from skysh.domain import SKY, SUN, TERM_ORDER
 from skysh.runtime import SkySH
 
 ENTRIES: tuple[str, ...] = ("format", "format_version", "table", "degrees", "sun_table", "sun_degrees", "irradiance_table",
@@ -75,15 +76,15 @@ def _small_table(bands: int = 3, degrees: tuple[int, int] = (4, 2), seed: int = 
 
 def _irradiance_block(degrees: list[list[int]], colourspace: str = "sRGB") -> dict[str, Any]:
     """The block write() stores for the irradiance: the format's fixed fields, degrees, colourspace, what was recorded."""
-    fields = {"basis": cf.IRRADIANCE_BASIS, "domain": cf.DOMAIN, "term_order": cf.TERM_ORDER,
+    fields = {"basis": cf.IRRADIANCE_BASIS, "domain": cf.DOMAIN, "term_order": TERM_ORDER,
               "units": "cd/m^2 x sr (irradiance; lux for the luminance), linear RGB"}
     return {**fields, "colourspace": colourspace, "degrees": degrees, **RECORDED}
 
 
 def _sun_block(degrees: list[list[int]], colourspace: str = "sRGB", **extra: Any) -> dict[str, Any]:
     """The block write() stores for the sun: the format's fixed fields (typed from the module), degrees, colourspace."""
-    fields = {"air_mass_range": list(sun_table.SUN_AIR_MASS_RANGE), "basis": sun_table.SUN_BASIS, "domain": cf.DOMAIN,
-              "term_order": cf.TERM_ORDER, "units": sun_table.SUN_UNITS, "variables": sun_table.SUN_VARIABLES}
+    fields = {"air_mass_range": list(SUN.x.fitted), "basis": sun_table.SUN_BASIS, "domain": cf.DOMAIN,
+              "term_order": TERM_ORDER, "units": sun_table.SUN_UNITS, "variables": sun_table.SUN_VARIABLES}
     return {**fields, "colourspace": colourspace, "degrees": degrees, **extra}
 
 
@@ -133,7 +134,7 @@ class TestRoundTrip:
         assert back.tables["irradiance"].degrees.tolist() == [[4, 2]] * 3
         # Stored: the caller's metadata plus the runtime fields, the blocks filled in, and the hash.
         sun = _sun_block([[3, 2]], rgb_from_xyz=SRGB_FROM_XYZ, errors={"worst": 1e-6})
-        added = {"domain": cf.DOMAIN, "basis": cf.BASIS, "term_order": cf.TERM_ORDER, "degrees": [[4, 2]] * 3, "bands": 3,
+        added = {"domain": cf.DOMAIN, "basis": cf.BASIS, "term_order": TERM_ORDER, "degrees": [[4, 2]] * 3, "bands": 3,
                  "tables": {"sun": sun, "irradiance": _irradiance_block([[4, 2]] * 3)}}
         assert back.metadata == {**original.metadata, **added, cf.HASH_KEY: back.metadata[cf.HASH_KEY]}
         assert back.bands == 3 and back.max_degrees == (4, 2) and back.colourspace == "sRGB"
@@ -296,7 +297,7 @@ class TestBounds:
 
     def test_domain_is_the_packages(self) -> None:
         assert cf.DOMAIN == {"sun_zenith": [0.0, np.pi / 2], "turbidity": [2.5, 6.0]}
-        assert tuple(cf.DOMAIN["sun_zenith"]) == poly.SUN_ZENITH_DOMAIN
+        assert tuple(cf.DOMAIN["sun_zenith"]) == SKY.x.interval
 
 
 class TestRefusals:
@@ -598,7 +599,7 @@ class TestWriteRefusals:
 # --------------------------------------------------------------------------- #
 EXTRA = cf.TableSpec(
     name="extra", required=False, groups=(2, 2),
-    fields={"basis": cf.BASIS, "domain": cf.DOMAIN, "term_order": cf.TERM_ORDER, "units": "test: radiance"},
+    fields={"basis": cf.BASIS, "domain": cf.DOMAIN, "term_order": TERM_ORDER, "units": "test: radiance"},
     max_magnitude=cf.MAX_TABLE_MAGNITUDE,
 )
 """A further table (2 bands of the sky's form), optional, as a test declares it."""

@@ -852,10 +852,10 @@ class TestExportSource:
         plan = sky.plan(3, False)
         np.testing.assert_array_equal(tables.table.reshape(plan.half_table.shape), plan.half_table)
         assert tables.degrees == plan.degrees
-        from skysh import runtime  # the variables' maps: the same doubles as the runtime's
+        from skysh.domain import SKY  # the variables' maps: the same doubles as the runtime's
 
         assert (tables.x_scale, tables.x_shift, tables.y_scale, tables.y_shift) == (
-            runtime.X_SCALE, runtime.X_SHIFT, runtime.Y_SCALE, runtime.Y_SHIFT)
+            SKY.x.scale, SKY.x.shift, SKY.y.scale, SKY.y.shift)
         radiance_equivalent = sky._table_plans[False]  # the runtime's plan of the irradiance table (no lobe)
         assert tables.degrees == radiance_equivalent.degrees  # the shipped file: the same degrees as the sky's
         np.testing.assert_array_equal(tables.irradiance.reshape(radiance_equivalent.half_table.shape),

@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from skysh import cli, hazel, poly, preetham, render, sh, sun
+from skysh import cli, domain, hazel, poly, preetham, render, sh, sun
 from skysh._checks import MAX_ARRAY_ELEMENTS
 from skysh.runtime import SkySH, gibbs_factors
 
@@ -360,9 +360,9 @@ ROWS: list[Row] = [
     # skysh.poly
     Row("poly.scale", lambda: poly.scale, dict(sun_zenith=0.5, turbidity=3.0, log_turbidity=True),
         dict(sun_zenith=Number(), turbidity=Number(low=5e-324), log_turbidity=Flag())),
-    Row("poly.chebyshev", lambda: poly.chebyshev, dict(x=0.3, degree=5), dict(x=Number(), degree=Count(0, poly.MAX_DEGREE))),
+    Row("poly.chebyshev", lambda: poly.chebyshev, dict(x=0.3, degree=5), dict(x=Number(), degree=Count(0, domain.MAX_DEGREE))),
     Row("poly.n_terms", lambda: poly.n_terms, dict(degrees=(13, 7)), dict(degrees=PAIR)),
-    Row("poly.term_index", lambda: poly.term_index, dict(i=2, j=3, degrees=(13, 7)),
+    Row("domain.term_index", lambda: domain.term_index, dict(i=2, j=3, degrees=(13, 7)),
         dict(i=Count(0, 13), j=Count(0, 7), degrees=PAIR)),
     Row("poly.design", lambda: poly.design, dict(sun_zenith=0.5, turbidity=3.0, degrees=(3, 2), log_turbidity=True),
         dict(sun_zenith=Number(), turbidity=Number(low=5e-324), degrees=PAIR, log_turbidity=Flag())),

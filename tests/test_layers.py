@@ -36,32 +36,34 @@ SKYSH: Path = ROOT / "skysh"
 LAYERS: dict[str, int] = {
     # 0: foundation (argument checks, version, the npz reader)
     "_version": 0, "_checks": 0, "_npz": 0, "files": 0, "_mitsuba_data": 0, "argtypes": 0,
-    # 1: SH mathematics and the fitted parameters' domain and basis
-    "sh": 1, "poly": 1, "sun": 1,
-    # 2: the sky model, algorithms on SH coefficients alone, the sun table's form (what the file stores for the sun)
-    "preetham": 2, "ground": 2, "shmin": 2, "hazel": 2, "quantize": 2, "sun_table": 2,
-    # 3: built on those: the spectral sun model, deringing, the coefficient file
-    "solar": 3, "dering": 3, "coefficient_file": 3,
-    # 4: the sun's light (from the file's sun table); the Hosek-Wilkie sky (the solar spectrum and the ground)
-    "sunlight": 4, "hosek": 4,
-    # 5: the offline fit, the per-frame sun and ground, deringing as emitted code
-    "fit": 5, "lights": 5, "export_dering": 5,
-    # 6: the per-frame runtime
-    "runtime": 6, "export_lights": 6,
-    # 7: consumers: the irradiance fit, engine conventions, rendering, the JavaScript export's parts
-    "irradiance_fit": 7, "engines": 7, "render": 7, "export_js_parts": 7,
-    # 8: built on the engines: the numbers every export is written from (with the engines' plans), the engines' sun
-    "export_tables": 8, "engine_sun": 8,
-    # 9: the JavaScript and JSON exports
-    "export_js": 9,
-    # 10: the exports by language (C, GLSL, HLSL; js and json from export_js)
-    "export": 10,
-    # 11: applications and the command line's text
-    "viewer": 11, "cli_text": 11,
-    # 12: the command line
-    "cli": 12,
-    # 13: the package and its entry point
-    "__init__": 13, "__main__": 13,
+    # 1: SH mathematics and the fitted parameters' domain (intervals, maps to [-1, 1], term order)
+    "sh": 1, "domain": 1, "sun": 1,
+    # 2: the Chebyshev basis over the domain
+    "poly": 2,
+    # 3: the sky model, algorithms on SH coefficients alone, the sun table's form (what the file stores for the sun)
+    "preetham": 3, "ground": 3, "shmin": 3, "hazel": 3, "quantize": 3, "sun_table": 3,
+    # 4: built on those: the spectral sun model, deringing, the coefficient file
+    "solar": 4, "dering": 4, "coefficient_file": 4,
+    # 5: the sun's light (from the file's sun table); the Hosek-Wilkie sky (the solar spectrum and the ground)
+    "sunlight": 5, "hosek": 5,
+    # 6: the offline fit, the per-frame sun and ground, deringing as emitted code
+    "fit": 6, "lights": 6, "export_dering": 6,
+    # 7: the per-frame runtime
+    "runtime": 7, "export_lights": 7,
+    # 8: consumers: the irradiance fit, engine conventions, rendering, the JavaScript export's parts
+    "irradiance_fit": 8, "engines": 8, "render": 8, "export_js_parts": 8,
+    # 9: built on the engines: the numbers every export is written from (with the engines' plans), the engines' sun
+    "export_tables": 9, "engine_sun": 9,
+    # 10: the JavaScript and JSON exports
+    "export_js": 10,
+    # 11: the exports by language (C, GLSL, HLSL; js and json from export_js)
+    "export": 11,
+    # 12: applications and the command line's text
+    "viewer": 12, "cli_text": 12,
+    # 13: the command line
+    "cli": 13,
+    # 14: the package and its entry point
+    "__init__": 14, "__main__": 14,
 }
 """Layer of every module of ``skysh/`` (issue 14's picture: SH mathematics -> sky model -> fit
 and file -> runtime -> post-processing -> exports, engines and CLI, as the imports really run;
@@ -75,46 +77,48 @@ ALLOWED: dict[str, frozenset[str]] = {name: frozenset(deps) for name, deps in {
     "_mitsuba_data": (),
     "argtypes": (),
     "sh": ("_checks",),
-    "poly": ("_checks",),
+    "domain": ("_checks",),
+    "poly": ("_checks", "domain"),
     "sun": ("_checks",),
-    "preetham": ("_checks", "poly", "sh"),
+    "preetham": ("_checks", "sh", "domain"),
     "ground": ("_checks", "sh"),
     "shmin": ("_checks", "sh"),
     "hazel": ("_checks", "sh"),
     "quantize": ("_checks", "sh"),
-    "sun_table": ("_checks", "poly"),
-    "solar": ("_checks", "poly", "sh", "preetham"),
+    "sun_table": ("domain",),
+    "solar": ("_checks", "sh", "preetham", "domain"),
     "dering": ("_checks", "sh", "shmin"),
-    "coefficient_file": ("_checks", "_npz", "_version", "files", "poly", "sun_table"),
-    "sunlight": ("_checks", "_npz", "poly", "coefficient_file", "sun_table"),
+    "coefficient_file": ("_checks", "_npz", "_version", "files", "poly", "sun_table", "domain"),
+    "sunlight": ("_checks", "_npz", "poly", "coefficient_file", "sun_table", "domain"),
     "hosek": ("_checks", "_mitsuba_data", "ground", "preetham", "sh", "solar"),
-    "fit": ("_checks", "coefficient_file", "poly", "preetham", "sh", "sun_table", "solar"),
-    "lights": ("_checks", "coefficient_file", "ground", "poly", "preetham", "sh", "solar", "sun_table"),
-    "runtime": ("_checks", "coefficient_file", "ground", "lights", "poly", "preetham", "sh", "sunlight", "dering"),
+    "fit": ("_checks", "coefficient_file", "poly", "preetham", "sh", "sun_table", "solar", "domain"),
+    "lights": ("_checks", "coefficient_file", "ground", "preetham", "sh", "solar", "domain"),
+    "runtime": ("_checks", "coefficient_file", "ground", "lights", "poly", "preetham", "sh", "sunlight", "dering",
+                "domain"),
     "export_dering": ("_checks", "dering", "sh", "shmin"),
     "irradiance_fit": ("_checks", "fit", "preetham", "sh", "shmin"),
     "engines": ("_checks", "sh"),
     "render": ("_checks", "files", "ground", "lights", "preetham", "runtime", "sh", "solar"),
-    "export_lights": ("_checks", "coefficient_file", "ground", "lights", "poly", "preetham", "solar", "sun_table",
-                      "sunlight", "export_dering"),
+    "export_lights": ("_checks", "coefficient_file", "ground", "lights", "preetham", "solar", "sunlight",
+                      "export_dering", "domain"),
     "export_js_parts": ("export_lights", "export_dering"),
-    "export_tables": ("_checks", "coefficient_file", "engines", "export_lights", "poly", "runtime", "sh"),
+    "export_tables": ("_checks", "coefficient_file", "engines", "export_lights", "runtime", "sh", "domain"),
     "export_js": ("_checks", "_version", "engines", "export_js_parts", "export_lights", "export_tables", "preetham",
                   "runtime"),
     "export": ("_checks", "_version", "export_js", "export_lights", "export_tables", "preetham", "runtime"),
     "engine_sun": ("_checks", "engines"),
     "viewer": ("_version", "engines", "export", "files", "preetham", "render", "runtime", "sh", "sunlight"),
     "cli_text": ("_checks", "engines", "engine_sun", "export", "sh"),
-    "cli": ("_checks", "_version", "argtypes", "cli_text", "engines", "export", "files", "export_js", "poly", "preetham",
-            "render", "runtime", "sh", "sun", "viewer"),
+    "cli": ("_version", "argtypes", "cli_text", "engines", "export", "files", "export_js", "preetham", "render",
+            "runtime", "sh", "sun", "viewer", "domain"),
     "__init__": ("_version", "runtime"),
     "__main__": ("cli",),
 }.items()}
 """The ``skysh`` imports of every module as of issue 24 (issue 14's, after the studies moved to tools/studies/,
 with the sun table's form in sun_table and the exports' shared numbers in export_tables)."""
 
-RUNTIME_SIDE: tuple[str, ...] = ("runtime", "sunlight", "coefficient_file", "sun_table", "sh", "poly", "dering", "shmin",
-                                "engines")
+RUNTIME_SIDE: tuple[str, ...] = ("runtime", "sunlight", "coefficient_file", "sun_table", "sh", "domain", "poly", "dering",
+                                "shmin", "engines")
 """Modules a renderer loads per frame or at start-up: light at import."""
 
 NOT_AT_RUNTIME_IMPORT: frozenset[str] = frozenset({"colour", "matplotlib"})

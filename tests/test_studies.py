@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 from conftest import random_unit_vectors, tools_on_path, unit
 
-from skysh import dering, hazel, poly, preetham, quantize
+from skysh import dering, hazel, preetham, quantize
+from skysh.domain import SKY
 
 tools_on_path()
 from studies import hazel_study, quantize_study, sky  # noqa: E402  (tools/ is not a package on the path by default)
@@ -183,7 +184,7 @@ class TestSkyData:
     def test_sky_parameters(self):
         ts, az, t = sky.sample_sky_parameters(50, seed=3)
         assert ts.shape == az.shape == t.shape == (50,)
-        (z0, z1), (t0, t1) = poly.SUN_ZENITH_DOMAIN, poly.TURBIDITY_DOMAIN
+        (z0, z1), (t0, t1) = SKY.x.interval, SKY.y.interval
         assert ts.min() >= z0 and ts.max() <= z1 and az.min() >= 0 and az.max() < 2 * math.pi
         assert t.min() >= t0 and t.max() <= t1
         np.testing.assert_array_equal(sky.sample_sky_parameters(50, seed=3)[0], ts)

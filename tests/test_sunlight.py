@@ -34,7 +34,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from skysh import coefficient_file as cf
-from skysh import solar, sun_table
+from skysh import domain, solar, sun_table
 from skysh.sunlight import SunLight
 
 SUN_RTOL: float = 1e-4
@@ -121,15 +121,15 @@ def _errors(sun: SunLight, ts: np.ndarray, t: np.ndarray) -> tuple[float, float]
 # --------------------------------------------------------------------------- #
 class TestVariables:
     def test_air_mass_constants_are_solars(self) -> None:
-        assert sun_table.SUN_AIR_MASS_COEFFICIENTS == solar.KASTEN_COEFFICIENTS
-        np.testing.assert_allclose(sun_table.SUN_AIR_MASS_RANGE, solar.relative_optical_mass([0.0, HALF_PI]),
+        assert solar.KASTEN_COEFFICIENTS is domain.KASTEN_COEFFICIENTS
+        np.testing.assert_allclose(domain.SUN.x.fitted, solar.relative_optical_mass([0.0, HALF_PI]),
                                    rtol=AIR_MASS_RTOL, atol=0)
         ts = np.random.default_rng(3).uniform(0, HALF_PI, 1000)
         np.testing.assert_allclose(sun_table.air_mass(ts), solar.relative_optical_mass(ts), rtol=AIR_MASS_RTOL, atol=0)
 
     def test_file_format_records_the_same_basis(self) -> None:
         fields = next(spec for spec in cf.TABLES if spec.name == "sun").fields
-        assert fields["air_mass_range"] == list(sun_table.SUN_AIR_MASS_RANGE)
+        assert fields["air_mass_range"] == list(domain.SUN.x.fitted)
         assert fields["basis"] == sun_table.SUN_BASIS and fields["variables"] == sun_table.SUN_VARIABLES
 
     def test_variables_span_the_unit_square(self) -> None:
@@ -137,7 +137,7 @@ class TestVariables:
         assert x.tolist() == [-1.0, 1.0] and y.tolist() == [-1.0, 1.0]
         # Kasten's formula dips just below m(0) near the zenith (documented); x is clamped there.
         ts = np.linspace(0.0, 3e-3, 3001)
-        dip = sun_table.SUN_AIR_MASS_RANGE[0] - sun_table.air_mass(ts).min()
+        dip = domain.SUN.x.fitted[0] - sun_table.air_mass(ts).min()
         assert 0.0 < dip < KASTEN_DIP_MAX
         assert sun_table.sun_variables(ts, 3.0)[0].min() == -1.0
 

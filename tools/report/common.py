@@ -25,7 +25,8 @@ from numpy.typing import NDArray
 from tqdm import tqdm
 
 from report.plans import Plan
-from skysh import coefficient_file, fit, poly, preetham, runtime, sh
+from skysh import coefficient_file, fit, preetham, runtime, sh
+from skysh.domain import SKY
 from skysh.runtime import SkySH
 
 matplotlib.use("Agg")  # PNGs only, no display (no figure exists yet, so the switch is free)
@@ -266,8 +267,8 @@ def luminance_row() -> NDArray:
 
 def uniform_grid(shape: tuple[int, int]) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     """Uniform (sun zenith, turbidity) grid over the fitted domain including its edges: flat arrays and axes."""
-    zen = np.linspace(*poly.SUN_ZENITH_DOMAIN, shape[0])
-    tur = np.linspace(*poly.TURBIDITY_DOMAIN, shape[1])
+    zen = np.linspace(*SKY.x.interval, shape[0])
+    tur = np.linspace(*SKY.y.interval, shape[1])
     a, b = np.meshgrid(zen, tur, indexing="ij")
     return a.ravel(), b.ravel(), zen, tur
 

@@ -29,13 +29,13 @@ from typing import Any
 import numpy as np
 
 from report.common import MAX_BANDS, Context, Section, sig
-from skysh import poly
+from skysh.domain import SKY
 
 FUZZ_SEED: int = 99
 """Seed of the fuzzer's generator."""
 HALF_PI: float = math.pi / 2.0
-ZENITH_RANGE: tuple[float, float] = poly.SUN_ZENITH_DOMAIN
-TURBIDITY_RANGE: tuple[float, float] = poly.TURBIDITY_DOMAIN
+ZENITH_RANGE: tuple[float, float] = SKY.x.interval
+TURBIDITY_RANGE: tuple[float, float] = SKY.y.interval
 AZIMUTH_RANGE: tuple[float, float] = (-10.0, 10.0)
 """In-domain azimuths drawn (rad); any finite azimuth is valid."""
 JUST_OUTSIDE_Z: tuple[float, ...] = (float(np.nextafter(0.0, -1.0)), float(np.nextafter(HALF_PI, 4.0)), -1e-300,

@@ -34,6 +34,7 @@ from report.common import (
     style_axes,
 )
 from skysh import dering, fit, poly, preetham, sh
+from skysh.domain import SKY
 
 NUMBER: int = 8
 TITLE: str = "Stability where methods fail"
@@ -296,12 +297,12 @@ def _render_extrapolation(ctx: Context, s: Section, d: dict[str, Any]) -> None:
         label = f"sun zenith {math.degrees(z):.0f} deg"
         line = ax.plot(tur, 100 * errors[MAX_BANDS][k], "o-", markersize=3, label=f"{label}, 7 bands")
         ax.plot(tur, 100 * errors[3][k], "--", color=line[0].get_color(), label=f"{label}, 3 bands")
-    ax.axvspan(*poly.TURBIDITY_DOMAIN, color="tab:green", alpha=0.1, label="fitted domain (runtime accepts)")
+    ax.axvspan(*SKY.y.interval, color="tab:green", alpha=0.1, label="fitted domain (runtime accepts)")
     style_axes(ax, "turbidity (dimensionless)", "E_mean of the polynomial (% of L_min)",
                "What the polynomial would give outside the domain (the runtime refuses)", ylog=True, legend={"fontsize": 8})
     s.figure(ctx.save(fig, "s08_extrapolation.png"), "Error of the shipped polynomial evaluated outside its turbidity domain")
     e7 = errors[MAX_BANDS]
-    inside = e7[:, (tur >= poly.TURBIDITY_DOMAIN[0]) & (tur <= poly.TURBIDITY_DOMAIN[1])].max()
+    inside = e7[:, (tur >= SKY.y.interval[0]) & (tur <= SKY.y.interval[1])].max()
     below, above = EXTRAPOLATION_REPORTED
     low = e7[:, tur <= below].max() if (tur <= below).any() else math.nan
     high = e7[:, tur >= above].max() if (tur >= above).any() else math.nan

@@ -3,8 +3,8 @@ Sky points over the fitted domain and their SH
 ==============================================
 
 -   :func:`sample_sky_parameters`: (sun zenith, sun azimuth, turbidity) points,
-    low-discrepancy over the fitted domain (:data:`skysh.poly.SUN_ZENITH_DOMAIN`,
-    :data:`skysh.poly.TURBIDITY_DOMAIN`).
+    low-discrepancy over the fitted domain (:data:`skysh.domain.SKY`,
+    :data:`skysh.domain.SKY`).
 -   :func:`reference_sh`: the reference projection :func:`skysh.preetham.sky_sh`
     at many points, any band count.
 -   :func:`sky_coefficients`: 9-coefficient RGB SH at many points from a *named*
@@ -18,7 +18,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from skysh import poly, preetham
+from skysh import preetham
 from skysh._checks import (
     MAX_ARRAY_ELEMENTS,
     as_float_array,
@@ -27,6 +27,7 @@ from skysh._checks import (
     check_range,
     check_seed,
 )
+from skysh.domain import SKY
 
 __all__ = ["SKY_SOURCES", "SKY_PARAMETERS", "sample_sky_parameters", "reference_sh", "sky_coefficients"]
 
@@ -60,8 +61,8 @@ def sample_sky_parameters(n: int, seed: int | None = 0) -> tuple[NDArray, NDArra
     Returns
     -------
     sun_zenith, sun_azimuth, turbidity
-        Shapes (n,) each: radians in :data:`skysh.poly.SUN_ZENITH_DOMAIN`, radians
-        in [0, 2 pi), and turbidity in :data:`skysh.poly.TURBIDITY_DOMAIN`, uniform
+        Shapes (n,) each: radians in :data:`skysh.domain.SKY`, radians
+        in [0, 2 pi), and turbidity in :data:`skysh.domain.SKY`, uniform
         in each parameter (low-discrepancy, so small ``n`` still covers the domain).
     """
     n = check_count(n, "n", 1, MAX_SKY_POINTS)
@@ -69,7 +70,7 @@ def sample_sky_parameters(n: int, seed: int | None = 0) -> tuple[NDArray, NDArra
     from scipy.stats import qmc  # imported on first use: scipy is heavy
 
     u = qmc.Halton(d=SKY_PARAMETERS, scramble=True, rng=np.random.default_rng(seed)).random(n)
-    (z0, z1), (t0, t1) = poly.SUN_ZENITH_DOMAIN, poly.TURBIDITY_DOMAIN
+    (z0, z1), (t0, t1) = SKY.x.interval, SKY.y.interval
     return z0 + (z1 - z0) * u[:, 0], 2.0 * math.pi * u[:, 1], t0 + (t1 - t0) * u[:, 2]
 
 
@@ -109,9 +110,9 @@ def sky_coefficients(
     Parameters
     ----------
     sun_zenith
-        Radians, in :data:`skysh.poly.SUN_ZENITH_DOMAIN`, shape (P,) (or scalar).
+        Radians, in :data:`skysh.domain.SKY`, shape (P,) (or scalar).
     turbidity
-        In :data:`skysh.poly.TURBIDITY_DOMAIN`, broadcasting with ``sun_zenith``.
+        In :data:`skysh.domain.SKY`, broadcasting with ``sun_zenith``.
     sun_azimuth
         Radians, broadcasting with ``sun_zenith``.
     source
@@ -131,8 +132,8 @@ def sky_coefficients(
     A runtime that cannot load raises its own error; it is never replaced by the reference.
     """
     check_choice(source, "source", SKY_SOURCES)
-    ts = check_range(sun_zenith, "sun_zenith", *poly.SUN_ZENITH_DOMAIN, unit="rad")
-    t = check_range(turbidity, "turbidity", *poly.TURBIDITY_DOMAIN)
+    ts = check_range(sun_zenith, "sun_zenith", *SKY.x.interval, unit="rad")
+    t = check_range(turbidity, "turbidity", *SKY.y.interval)
     az = as_float_array(sun_azimuth, "sun_azimuth")
     ts, t, az = (np.ravel(a) for a in np.broadcast_arrays(ts, t, az))
     if source == "reference":
