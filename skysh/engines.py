@@ -152,14 +152,8 @@ Y up ``(x, z, -y)``; left-handed Y up ``(x, z, y)``; left-handed Z up ``(x, -y, 
 for _m in ENGINE_FRAMES.values():
     _m.flags.writeable = False
 
-_SQRT_PI: float = math.sqrt(math.pi)
-BASIS_CONSTANTS: NDArray[np.float64] = np.array([
-    0.5 / _SQRT_PI, -math.sqrt(3.0) / (2.0 * _SQRT_PI), math.sqrt(3.0) / (2.0 * _SQRT_PI),
-    -math.sqrt(3.0) / (2.0 * _SQRT_PI), math.sqrt(15.0) / (2.0 * _SQRT_PI), -math.sqrt(15.0) / (2.0 * _SQRT_PI),
-    math.sqrt(5.0) / (4.0 * _SQRT_PI), -math.sqrt(15.0) / (2.0 * _SQRT_PI), math.sqrt(15.0) / (4.0 * _SQRT_PI),
-])
-"""Signed k_i of ``Y_i = k_i p_i``, p = (1, y, z, x, xy, yz, 3z^2 - 1, xz, x^2 - y^2) (docs/conventions.md, CS)."""
-BASIS_CONSTANTS.flags.writeable = False
+BASIS_CONSTANTS: NDArray[np.float64] = sh.BASIS_CONSTANTS
+"""Signed k_i of ``Y_i = k_i p_i`` (:data:`skysh.sh.BASIS_CONSTANTS`, read-only): the factors engines pre-scale by."""
 
 _BABYLON_ROWS: tuple[str, ...] = ("l00", "l1_1", "l10", "l11", "l2_2", "l2_1", "l20", "l21", "l22")
 _UNITY_ROWS: tuple[str, ...] = (

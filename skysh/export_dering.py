@@ -208,7 +208,7 @@ def dering_source(language: str, target: str = "irradiance", name: str = "skysh_
     precision = "double" if language in ("c", "js") else "float"
     table = dering.window_table(3, target)
     tiny, floor, pole, allowance = _GUARDS[precision]
-    consts = {"Y00": shmin.Y00, "KL": shmin.K_LINEAR, "KB": shmin.K_PRODUCT, "K0": shmin.K_ZONAL, "K2": shmin.K_SECTORAL,
+    consts = {"Y00": sh.Y00, "KL": sh.K_LINEAR, "KB": sh.K_PRODUCT, "K0": sh.K_ZONAL, "K2": sh.K_SECTORAL,
               "TINY": tiny, "FLOOR": floor, "POLE": pole, "ROUND": allowance}
     body = _BODY.replace("NORMALISE", _NORMALISE[language])
     body = re.sub(r"\b(" + "|".join(consts) + r")\b", lambda m: _literal(consts[m.group(1)], precision), body)

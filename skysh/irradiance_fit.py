@@ -138,8 +138,8 @@ def require_solver(task: str = _SOLVES) -> None:
         raise ModuleNotFoundError(solver_missing_message(task), name=missing[0])
 
 
-Y00: float = shmin.Y00
-"""Y(0, 0) = 1 / (2 sqrt(pi)); the mean of a function over the sphere is Y00 e0."""
+Y00: float = sh.Y00
+"""Y(0, 0) = 1 / (2 sqrt(pi)) (:data:`skysh.sh.Y00`); the mean of a function over the sphere is Y00 e0."""
 
 LOBE: NDArray[np.float64] = sh.cosine_lobe(3)[np.repeat(np.arange(3), 2 * np.arange(3) + 1)]
 """(9,) clamped-cosine factor A_l of every 3-band coefficient (pi, 2 pi / 3 x 3, pi / 4 x 5)."""

@@ -8,6 +8,10 @@ The SH mathematics every other module of skysh builds on, in the convention of
 shaped ``(..., N * N, C)``, right-handed Z-up frame.
 
 -   :func:`n_coeffs`, :func:`index`, :func:`lm`, :func:`band_of_index`: the index layout.
+-   :data:`Y00`, :data:`K_LINEAR`, :data:`K_PRODUCT`, :data:`K_ZONAL`, :data:`K_SECTORAL`,
+    :data:`BASIS_CONSTANTS`: the constants of the first three bands' polynomials, once for
+    every module that writes them out (the exact minimum, the engines, the irradiance fit,
+    the normalised basis, the generated code).
 -   :func:`basis`: the basis at unit vectors, by a Cartesian recurrence
     (:func:`basis_unchecked` for checked input; :func:`basis_recurrence`, its constants).
 -   :func:`evaluate`: reconstruct a function from its coefficients.
@@ -59,6 +63,12 @@ from skysh._checks import (
 )
 
 __all__ = [
+    "Y00",
+    "K_LINEAR",
+    "K_PRODUCT",
+    "K_ZONAL",
+    "K_SECTORAL",
+    "BASIS_CONSTANTS",
     "MAX_BANDS",
     "MAX_GAUSS_NODES",
     "PROJECTION_METHODS",
@@ -84,6 +94,30 @@ __all__ = [
     "to_y_up",
     "from_y_up",
 ]
+
+_SQRT_PI: float = math.sqrt(math.pi)
+
+Y00: float = 0.5 / _SQRT_PI
+"""Y_0^0 = 1 / (2 sqrt(pi)), the constant basis function: the mean over the sphere of SH c is ``c_0 Y00``."""
+
+K_LINEAR: float = math.sqrt(3.0) / (2.0 * _SQRT_PI)
+"""|Y_1^m| / |(y, z, x)|: Y_1 = K_LINEAR (-y, z, -x) with the Condon-Shortley phase (docs/conventions.md)."""
+
+K_PRODUCT: float = math.sqrt(15.0) / (2.0 * _SQRT_PI)
+"""The factor of xy, yz and xz in Y_2^-2, Y_2^-1, Y_2^1."""
+
+K_ZONAL: float = math.sqrt(5.0) / (4.0 * _SQRT_PI)
+"""The factor of 3 z^2 - 1 in Y_2^0."""
+
+K_SECTORAL: float = math.sqrt(15.0) / (4.0 * _SQRT_PI)
+"""The factor of x^2 - y^2 in Y_2^2."""
+
+BASIS_CONSTANTS: NDArray[np.float64] = np.array([
+    Y00, -K_LINEAR, K_LINEAR, -K_LINEAR, K_PRODUCT, -K_PRODUCT, K_ZONAL, -K_PRODUCT, K_SECTORAL,
+])
+"""Signed k_i of ``Y_i = k_i p_i``, p = (1, y, z, x, xy, yz, 3z^2 - 1, xz, x^2 - y^2), i = 0 .. 8
+(docs/conventions.md, Condon-Shortley phase); read-only."""
+BASIS_CONSTANTS.flags.writeable = False
 
 MAX_BANDS: int = 64
 """Largest band count accepted (l <= 63); the recurrence is stable far beyond it."""
@@ -162,7 +196,7 @@ def basis_recurrence(bands: int) -> BasisRecurrence:
 @cache
 def _recurrence(bands: int) -> BasisRecurrence:
     diag = np.empty(bands)
-    diag[0] = 0.5 / math.sqrt(math.pi)
+    diag[0] = Y00
     for m in range(1, bands):
         # Q[m,m] / Q[m-1,m-1] = -(2m - 1) * sqrt((2m+1)/(2m) / (2m-1)^2 ...) in closed form:
         # N_mm (2m-1)!! / (N_{m-1,m-1} (2m-3)!!) = -sqrt((2m + 1) / (2m)), and sqrt(2) once at m = 1.

@@ -28,6 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from skysh import sh
 from skysh._checks import as_float_array, check_coeffs, check_flag
+from skysh.sh import K_LINEAR, K_PRODUCT, K_SECTORAL, K_ZONAL, Y00  # the basis constants, once
 
 __all__ = ["FORM_MAP", "MAX_MIN_BANDS", "DIRECTIONS", "COVER_RADIUS", "SPLIT", "LEVELS", "VALUE_LEVELS",
            "sphere_quadratic", "exact_min", "tangent_frame"]
@@ -35,13 +36,6 @@ __all__ = ["FORM_MAP", "MAX_MIN_BANDS", "DIRECTIONS", "COVER_RADIUS", "SPLIT", "
 MAX_MIN_BANDS: int = 7
 """Largest band count of :func:`exact_min` (49 coefficients)."""
 
-Y00, K_LINEAR = 0.5 / math.sqrt(math.pi), math.sqrt(3.0) / (2.0 * math.sqrt(math.pi))
-K_PRODUCT, K_ZONAL, K_SECTORAL = (
-    math.sqrt(15.0) / (2 * math.sqrt(math.pi)),
-    math.sqrt(5.0) / (4 * math.sqrt(math.pi)),
-    math.sqrt(15.0) / (4 * math.sqrt(math.pi)),
-)
-"""Factors of 1, (x, y, z), xy etc., 3 z^2 - 1 and x^2 - y^2 in Y_0 .. Y_8 (docs/conventions.md)."""
 
 
 def _form_map() -> NDArray[np.float64]:

@@ -867,3 +867,24 @@ class TestIrradiance:
     def test_invalid(self):
         with pytest.raises(ValueError, match="coeffs"):
             sh.irradiance(np.zeros(6))
+
+
+class TestBasisConstants:
+    """The constants of the first three bands' polynomials, defined once in skysh.sh (issue 24)."""
+
+    def test_against_scipy(self) -> None:
+        """Y_i = k_i p_i with p = (1, y, z, x, xy, yz, 3z^2 - 1, xz, x^2 - y^2), against scipy's real SH."""
+        d = random_unit_vectors(64, 24)
+        x, y, z = d.T
+        p = np.stack([np.ones_like(x), y, z, x, x * y, y * z, 3 * z * z - 1, x * z, x * x - y * y], axis=-1)
+        np.testing.assert_allclose(p * sh.BASIS_CONSTANTS, scipy_real_sh(d, 3), rtol=0, atol=BASIS_SCIPY_ATOL)
+        assert sh.BASIS_CONSTANTS[0] == sh.Y00 == 1.0 / (2.0 * math.sqrt(math.pi))
+
+    def test_used_by_identity(self) -> None:
+        """Every module that writes the constants takes them from skysh.sh: the same objects, not copies."""
+        from skysh import engines, irradiance_fit, shmin
+
+        assert engines.BASIS_CONSTANTS is sh.BASIS_CONSTANTS and not sh.BASIS_CONSTANTS.flags.writeable
+        for name in ("Y00", "K_LINEAR", "K_PRODUCT", "K_ZONAL", "K_SECTORAL"):
+            assert getattr(shmin, name) is getattr(sh, name), name
+        assert irradiance_fit.Y00 is sh.Y00

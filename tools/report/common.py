@@ -75,8 +75,8 @@ METHOD_STYLE: dict[str, dict[str, Any]] = {
 DPI: int = 100
 """Resolution of the PNGs (keeps the committed report small)."""
 
-Y00: float = 0.5 / math.sqrt(math.pi)
-"""The constant SH basis function: the mean over the sphere of SH c is ``c_0 * Y00``."""
+Y00: float = sh.Y00
+"""The constant SH basis function (:data:`skysh.sh.Y00`): the mean over the sphere of SH c is ``c_0 * Y00``."""
 
 HALF_ROWS: NDArray[np.intp] = np.array(
     [sh.index(degree, m) for degree, m in coefficient_file.zonal_half_layout(MAX_BANDS)], dtype=np.intp
