@@ -406,17 +406,17 @@ def _cmd_coeffs(args: argparse.Namespace) -> int:
     _check_turbidity(args.turbidity)
     from skysh import SkySH, sh
     from skysh._version import __version__
+    from skysh.options import Options
 
     sky = SkySH.load()
     _check_coeffs_options(args, sky)
-    diffuse = args.irradiance or args.engine is not None
-    gibbs = not diffuse if args.gibbs is None else args.gibbs
-    dering = diffuse if args.dering is None else args.dering
-    # engines light diffusely: their 3-band presets take the certified irradiance table as the exports do
-    table = True if args.engine is not None and args.bands == 3 and not gibbs and dering and sky.has_irradiance_table else None
-    c = sky.coefficients(sun.zenith, args.turbidity, sun.azimuth, bands=args.bands, gibbs=gibbs, dering=dering,
-                         irradiance=args.irradiance, colourspace=args.colourspace, sun=args.sun,
-                         ground_albedo=args.ground_albedo, irradiance_table=table)
+    # the runtime's rules by intent (engines light diffusely: their 3-band presets take the certified irradiance table)
+    o = Options.resolve(args.bands, args.gibbs, args.dering, args.irradiance, None, args.sun, args.ground_albedo,
+                        args.colourspace, args.engine, has_table=sky.has_irradiance_table, max_bands=sky.bands)
+    gibbs, dering = o.gibbs, o.dering
+    c = sky.coefficients(sun.zenith, args.turbidity, sun.azimuth, bands=o.bands, gibbs=gibbs, dering=dering,
+                         irradiance=o.irradiance, colourspace=o.colourspace, sun=o.sun,
+                         ground_albedo=o.ground_albedo or 0.0, irradiance_table=o.irradiance_table)
     if args.up == "y":
         c = sh.to_y_up(c)
     c, scale, units = _coeffs_scaled(c, args)

@@ -6,7 +6,7 @@ The arithmetic behind ``SkySH.coefficients(..., sun=True, ground_albedo=...)``
 and ``SkySH.sun_light``; :mod:`skysh.runtime` owns the API and the checks of
 the sky's parameters, this module the static tables and the per-frame sums.
 
--   :func:`check_albedo`: the ``ground_albedo`` parameter, checked.
+-   :func:`check_albedo`: the ``ground_albedo`` parameter, checked (defined in :mod:`skysh.options`).
 -   :func:`sun_trig_matrix`: the sun's windowed SH at azimuth 0 as a
     trigonometric polynomial in the sun zenith.
 -   :func:`ground_zonal`: the ground's zonal SH per unit radiance, Gibbs-filtered or not.
@@ -78,16 +78,12 @@ from skysh._checks import (
     as_float_array,
     check_bands,
     check_flag,
-    number_text,
-    short_repr,
 )
 from skysh.domain import KASTEN_COEFFICIENTS, SUN
+from skysh.options import ALBEDO_RANGE, check_albedo
 from skysh.preetham import luminance_scale_unchecked
 
 __all__ = ["SUN_SH_CLAMP", "ALBEDO_RANGE", "check_albedo", "sun_trig_matrix", "ground_zonal", "LitPlan"]
-
-ALBEDO_RANGE: tuple[float, float] = (0.0, 1.0)
-"""Valid ground albedo per channel (a Lambertian reflectance)."""
 
 SUN_SH_CLAMP: float = 0.0
 """Lower bound of each channel of the sun's RGB illuminance in its SH delta (lux).
@@ -107,57 +103,6 @@ _A, _B, _NEG_C = KASTEN_COEFFICIENTS[0], KASTEN_COEFFICIENTS[1], -KASTEN_COEFFIC
 # The sun table's map (skysh.domain.SUN) as floats: x_s = (m - _M0) _SX_SCALE - 1, y_s = (T - _TMIN) _SY_SCALE - 1.
 _M0, _SX_SCALE, _TMIN, _SY_SCALE = SUN.x.origin, SUN.x.scale, SUN.y.origin, SUN.y.scale
 _DEG: float = 180.0 / math.pi
-
-
-def check_albedo(ground_albedo: Any) -> tuple[float, float, float] | None:
-    """
-    The ``ground_albedo`` parameter as three Python floats, or None for a black ground.
-
-    Parameters
-    ----------
-    ground_albedo
-        A real number or an RGB triple, each in [0, 1] (dimensionless
-        reflectance; per channel of the output colourspace).
-
-    Returns
-    -------
-    tuple or None
-        (R, G, B) albedo; None when every channel is 0 (the ground adds nothing).
-
-    Raises
-    ------
-    ValueError
-        Naming ``ground_albedo``: a bool, text, NaN or inf, not one number or
-        three, or a value outside [0, 1].
-    """
-    low, high = ALBEDO_RANGE
-    kind = type(ground_albedo)
-    if kind is float or kind is int:  # the per-frame paths: Python numbers, no numpy
-        if not low <= ground_albedo <= high:  # also False for NaN; exact for an int of any size (no float())
-            raise ValueError(f"ground_albedo must lie in [{low:g}, {high:g}], got {number_text(ground_albedo)}")
-        value = float(ground_albedo)
-        return None if value == 0.0 else (value, value, value)
-    if (kind is tuple or kind is list) and len(ground_albedo) == 3:  # three Python floats in range: no numpy
-        r, g, b = ground_albedo
-        if type(r) is float and type(g) is float and type(b) is float and low <= r <= high and low <= g <= high \
-                and low <= b <= high:
-            return None if r == 0.0 and g == 0.0 and b == 0.0 else (r, g, b)
-    return _array_albedo(ground_albedo)
-
-
-def _array_albedo(ground_albedo: Any) -> tuple[float, float, float] | None:
-    """:func:`check_albedo` of anything but a Python number or three floats in range: through numpy."""
-    low, high = ALBEDO_RANGE
-    if type(ground_albedo) in (tuple, list) and any(isinstance(v, (bool, np.bool_)) for v in ground_albedo):
-        raise ValueError(f"ground_albedo must be a real number or an RGB triple of numbers, got {short_repr(ground_albedo)}")
-    albedo = as_float_array(ground_albedo, "ground_albedo")  # refuses bools, text, NaN, inf
-    if albedo.shape not in ((), (3,)):
-        raise ValueError(f"ground_albedo must be a number or an RGB triple (3 values), got shape {albedo.shape}")
-    if albedo.min() < low or albedo.max() > high:
-        bad = albedo[(albedo < low) | (albedo > high)].ravel()[0]
-        raise ValueError(f"ground_albedo must lie in [{low:g}, {high:g}] per channel, got {number_text(bad)}")
-    rgb = np.broadcast_to(albedo, (3,)).tolist()
-    return None if not any(rgb) else (rgb[0], rgb[1], rgb[2])
 
 
 def sun_trig_matrix(bands: int, window: ArrayLike) -> NDArray[np.float64]:

@@ -31,6 +31,10 @@ addition). ``python benchmarks/bench_runtime.py`` prints what each costs
 against a bare numpy product; ``python benchmarks/bench_lights.py`` what the
 sun and the ground add.
 
+The per-frame flags are checked and their defaults resolved by intent once, by
+:meth:`skysh.options.Options.resolve` (the rule the CLI shares), cached per
+distinct setting of plain values so the scalar call pays a dictionary look-up.
+
 ``import skysh.runtime`` imports numpy and the coefficient file reader only:
 not colour-science, matplotlib or the offline fit.
 
@@ -61,6 +65,7 @@ from skysh._checks import (
     short_repr,
 )
 from skysh.domain import SKY
+from skysh.options import Options
 from skysh.preetham import luminance_scale_unchecked as _luminance_scale
 from skysh.sunlight import SunLight
 
@@ -70,6 +75,7 @@ __all__ = ["SkySH", "gibbs_factors"]
 _XS, _XH, _YS, _YH = SKY.x.scale, SKY.x.shift, SKY.y.scale, SKY.y.shift
 (_ZMIN, _ZMAX), (_TMIN, _TMAX) = SKY.x.interval, SKY.y.interval
 _TWO_PI: float = 2.0 * math.pi
+_RESOLVED_CACHE: int = 256  # resolved Options kept per SkySH (cleared when full)
 
 
 def gibbs_factors(bands: int) -> NDArray[np.float64]:
@@ -208,6 +214,7 @@ class SkySH:
         self._mixing: dict[str, bool] = {}  # colourspace -> its conversion matrix has a negative entry
         self._sun: SunLight | None = SunLight(sky_table) if "sun" in sky_table.tables else None
         self._lit_plans: dict[tuple[int, bool, bool, bool], lights.LitPlan] = {}  # on first use of the sun or ground
+        self._resolved: dict[tuple, Options] = {}  # SkySH._options per distinct plain setting
         irradiance = sky_table.tables.get("irradiance") if sky_table.bands >= 3 else None
         # The certified irradiance table (docs/irradiance.md): radiance-equivalent (False), irradiance (True).
         self._table_plans: dict[bool, _Plan] | None = None if irradiance is None else {
@@ -284,9 +291,11 @@ class SkySH:
         broadcasting, too large, or an unknown colourspace; ``sun=True`` without the file's sun table;
         ``irradiance_table=True`` without the table, with ``bands`` other than 3 or ``gibbs=True``.
         TypeError for ``gibbs``, ``dering``, ``irradiance``, ``sun`` or ``irradiance_table`` not a bool.
+        The options are checked and resolved by :meth:`skysh.options.Options.resolve` (its docstring: the rules).
         """
-        irradiance, gibbs, dering, table, sun, albedo = self._options(
-            irradiance, gibbs, dering, irradiance_table, bands, sun, ground_albedo, colourspace)
+        o = self._options(bands, gibbs, dering, irradiance, colourspace, sun, ground_albedo, irradiance_table)
+        bands, gibbs, dering, irradiance, table, sun, albedo = (
+            o.bands, o.gibbs, o.dering, o.irradiance, o.irradiance_table, o.sun, o.ground_albedo)
         ts, t, phi = real_scalar(sun_zenith), real_scalar(turbidity), real_scalar(sun_azimuth)
         scalar = ts is not None and t is not None and phi is not None
         if sun or albedo is not None:
@@ -307,21 +316,30 @@ class SkySH:
             out = out @ self._colour_matrix(colourspace).T
         return out
 
-    def _options(self, irradiance: Any, gibbs: Any, dering: Any, irradiance_table: Any, bands: Any, sun: Any,
-                 ground_albedo: Any, colourspace: Any) -> tuple[bool, bool, bool, bool, bool, Any]:
-        """The options of :meth:`coefficients` checked and resolved by intent: (irradiance, gibbs, dering,
-        table, sun, albedo or None)."""
-        irradiance = check_flag(irradiance, "irradiance")
-        gibbs = gibbs if gibbs is None else check_flag(gibbs, "gibbs")
-        dering = dering if dering is None else check_flag(dering, "dering")
-        table = self._use_table(irradiance_table, irradiance, bands, gibbs, dering)
-        gibbs = not (irradiance or table) if gibbs is None else gibbs
-        dering = irradiance if dering is None else dering
-        sun = sun if sun is False else check_flag(sun, "sun")
-        albedo = None if type(ground_albedo) is float and ground_albedo == 0.0 else lights.check_albedo(ground_albedo)
-        if colourspace is not None and not isinstance(colourspace, str):  # before any work, naming it
-            raise ValueError(f"colourspace must be None or a colour-science RGB colourspace name, got {short_repr(colourspace)}")
-        return irradiance, gibbs, dering, table, sun, albedo
+    def _options(
+        self, bands: int = 3, gibbs: bool | None = None, dering: bool | None = None, irradiance: bool = False,
+        colourspace: str | None = None, sun: bool = False, ground_albedo: ArrayLike = 0.0,
+        irradiance_table: bool | None = None,
+    ) -> Options:
+        """The options of :meth:`coefficients` (same names, defaults and refusals) checked and resolved by
+        intent for this file (:meth:`skysh.options.Options.resolve`, its table and irradiance table).
+
+        Cached per distinct set of plain values (Python bools, None, an int, a float albedo or three, a str),
+        so the per-frame call resolves each setting once; anything else (numpy values, arrays) is resolved
+        on every call.
+        """
+        key = _plain_key(bands, gibbs, dering, irradiance, irradiance_table, sun, ground_albedo, colourspace)
+        if key is not None:
+            resolved = self._resolved.get(key)
+            if resolved is None:
+                resolved = Options.resolve(bands, gibbs, dering, irradiance, irradiance_table, sun, ground_albedo,
+                                           colourspace, has_table=self._table_plans is not None, max_bands=self.bands)
+                if len(self._resolved) >= _RESOLVED_CACHE:  # e.g. an albedo animated per frame
+                    self._resolved.clear()
+                self._resolved[key] = resolved
+            return resolved
+        return Options.resolve(bands, gibbs, dering, irradiance, irradiance_table, sun, ground_albedo, colourspace,
+                               has_table=self._table_plans is not None, max_bands=self.bands)
 
     def _table_colour(self, out: NDArray, colourspace: str | None, dering: bool, irradiance: bool) -> NDArray:
         """The table's result in ``colourspace``, deringed after a conversion whose matrix mixes signs (``dering``)."""
@@ -329,24 +347,6 @@ class SkySH:
             return out
         out = out @ self._colour_matrix(colourspace).T
         return _dering(out, "radiance" if irradiance else "irradiance") if dering and self._mixing[colourspace] else out
-
-    def _use_table(self, choice: Any, irradiance: bool, bands: Any, gibbs: bool | None, dering: bool | None) -> bool:
-        """Whether :meth:`coefficients` takes the sky from the irradiance table (its ``irradiance_table`` rule)."""
-        if choice is None:
-            if not irradiance or self._table_plans is None or gibbs is True or dering is False:
-                return False
-            return (bands if type(bands) is int else check_bands(bands, high=self.bands)) == 3
-        if not check_flag(choice, "irradiance_table"):
-            return False
-        if self._table_plans is None:
-            raise ValueError("irradiance_table=True needs the coefficient file's irradiance table (format 4, 3 bands or "
-                             "more); this SkyTable has none")
-        if check_bands(bands, high=self.bands) != 3:
-            raise ValueError(f"irradiance_table=True needs bands=3 (the table's), got bands={bands!r}")
-        if gibbs is True:
-            raise ValueError("irradiance_table=True does not go with gibbs=True: the table is the irradiance's own "
-                             "optimum, not a filtered sky (pass gibbs=None or False, or irradiance_table=False)")
-        return True
 
     def _one(self, ts: float, t: float, phi: float, bands: Any, gibbs: bool, plan: _Plan | None = None) -> NDArray:
         """Scalar fast path: floats only, arithmetic on precomputed tables (``plan``: default the sky's)."""
@@ -609,6 +609,29 @@ class SkySH:
                 check_scalar(value, key)  # names the parameter: not a number, not finite, or an array
         bands = check_bands(bands, high=self.bands)
         return check_dirs(dirs, name, per_point=bands * bands)
+
+
+def _plain_key(bands: Any, gibbs: Any, dering: Any, irradiance: Any, irradiance_table: Any, sun: Any, ground_albedo: Any,
+               colourspace: Any) -> tuple | None:
+    """The cache key of :meth:`SkySH._options` for plain values (Python bools or None, an int, a float albedo or
+    three, None or a str), else None: equal values of other types (1 for True, 3.0 for 3) must be checked."""
+    albedo = ground_albedo if type(ground_albedo) is float else _albedo_key(ground_albedo)
+    if albedo is None or type(bands) is not int or type(irradiance) is not bool or type(sun) is not bool:
+        return None
+    if (gibbs is None or type(gibbs) is bool) and (dering is None or type(dering) is bool) \
+            and (irradiance_table is None or type(irradiance_table) is bool) \
+            and (colourspace is None or type(colourspace) is str):
+        return (bands, gibbs, dering, irradiance, irradiance_table, sun, albedo, colourspace)
+    return None
+
+
+def _albedo_key(albedo: Any) -> tuple[float, float, float] | None:
+    """An RGB albedo of three Python floats (a tuple or a list) as a key, else None (a bool or an int is not one)."""
+    kind = type(albedo)
+    if (kind is tuple or kind is list) and len(albedo) == 3 and type(albedo[0]) is float and type(albedo[1]) is float \
+            and type(albedo[2]) is float:
+        return (albedo[0], albedo[1], albedo[2])
+    return None
 
 
 def _dering(coeffs: NDArray[np.float64], target: str = "irradiance") -> NDArray[np.float64]:

@@ -36,8 +36,8 @@ SKYSH: Path = ROOT / "skysh"
 LAYERS: dict[str, int] = {
     # 0: foundation (argument checks, version, the npz reader)
     "_version": 0, "_checks": 0, "_npz": 0, "files": 0, "_mitsuba_data": 0, "argtypes": 0,
-    # 1: SH mathematics and the fitted parameters' domain (intervals, maps to [-1, 1], term order)
-    "sh": 1, "domain": 1, "sun": 1,
+    # 1: SH mathematics, the fitted parameters' domain (intervals, maps to [-1, 1], term order), the per-frame options
+    "sh": 1, "domain": 1, "sun": 1, "options": 1,
     # 2: the Chebyshev basis over the domain
     "poly": 2,
     # 3: the sky model, algorithms on SH coefficients alone, the sun table's form (what the file stores for the sun)
@@ -80,6 +80,7 @@ ALLOWED: dict[str, frozenset[str]] = {name: frozenset(deps) for name, deps in {
     "domain": ("_checks",),
     "poly": ("_checks", "domain"),
     "sun": ("_checks",),
+    "options": ("_checks",),
     "preetham": ("_checks", "sh", "domain"),
     "ground": ("_checks", "sh"),
     "shmin": ("_checks", "sh"),
@@ -92,9 +93,9 @@ ALLOWED: dict[str, frozenset[str]] = {name: frozenset(deps) for name, deps in {
     "sunlight": ("_checks", "_npz", "poly", "coefficient_file", "sun_table", "domain"),
     "hosek": ("_checks", "_mitsuba_data", "ground", "preetham", "sh", "solar"),
     "fit": ("_checks", "coefficient_file", "poly", "preetham", "sh", "sun_table", "solar", "domain"),
-    "lights": ("_checks", "coefficient_file", "ground", "preetham", "sh", "solar", "domain"),
+    "lights": ("_checks", "coefficient_file", "ground", "preetham", "sh", "solar", "domain", "options"),
     "runtime": ("_checks", "coefficient_file", "ground", "lights", "poly", "preetham", "sh", "sunlight", "dering",
-                "domain"),
+                "domain", "options"),
     "export_dering": ("_checks", "dering", "sh", "shmin"),
     "irradiance_fit": ("_checks", "fit", "preetham", "sh", "shmin"),
     "engines": ("_checks", "sh"),
@@ -110,15 +111,16 @@ ALLOWED: dict[str, frozenset[str]] = {name: frozenset(deps) for name, deps in {
     "viewer": ("_version", "engines", "export", "files", "preetham", "render", "runtime", "sh", "sunlight"),
     "cli_text": ("_checks", "engines", "engine_sun", "export", "sh"),
     "cli": ("_version", "argtypes", "cli_text", "engines", "export", "files", "export_js", "preetham", "render",
-            "runtime", "sh", "sun", "viewer", "domain"),
+            "runtime", "sh", "sun", "viewer", "domain", "options"),
     "__init__": ("_version", "runtime"),
     "__main__": ("cli",),
 }.items()}
 """The ``skysh`` imports of every module as of issue 24 (issue 14's, after the studies moved to tools/studies/,
-with the sun table's form in sun_table and the exports' shared numbers in export_tables)."""
+with the sun table's form in sun_table, the exports' shared numbers in export_tables and the per-frame options
+in options)."""
 
-RUNTIME_SIDE: tuple[str, ...] = ("runtime", "sunlight", "coefficient_file", "sun_table", "sh", "domain", "poly", "dering",
-                                "shmin", "engines")
+RUNTIME_SIDE: tuple[str, ...] = ("runtime", "options", "sunlight", "coefficient_file", "sun_table", "sh", "domain", "poly",
+                                "dering", "shmin", "engines")
 """Modules a renderer loads per frame or at start-up: light at import."""
 
 NOT_AT_RUNTIME_IMPORT: frozenset[str] = frozenset({"colour", "matplotlib"})
