@@ -45,7 +45,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
-from skysh.argtypes import integer, real
+from skysh.argtypes import FLOAT64_TINY, integer, real
 from skysh.cli_text import (
     TABLE_ZERO_BELOW,
     format_coefficients,
@@ -377,7 +377,6 @@ def _check_colourspace(name: str | None, sky: Any) -> None:
 
 _FLOAT32_MAX: float = 3.4028234663852886e38
 _FLOAT32_TINY: float = 1.1754943508222875e-38
-_FLOAT64_TINY: float = 2.2250738585072014e-308
 
 
 def _scaled(before: NDArray[np.float64], scale: float, flag: str, fmt: str) -> NDArray[np.float64]:
@@ -387,7 +386,7 @@ def _scaled(before: NDArray[np.float64], scale: float, flag: str, fmt: str) -> N
     with np.errstate(over="ignore", under="ignore"):
         after = before * scale
     float32 = fmt in ("glsl", "hlsl")
-    largest, tiny = (_FLOAT32_MAX, _FLOAT32_TINY) if float32 else (math.inf, _FLOAT64_TINY)
+    largest, tiny = (_FLOAT32_MAX, _FLOAT32_TINY) if float32 else (math.inf, FLOAT64_TINY)
     kind = "float32" if float32 else "float64"
     magnitude = np.abs(after)
     if not np.all(np.isfinite(after)) or magnitude.max() > largest:
