@@ -1,9 +1,9 @@
 """
-Throughput of :func:`skysh.sh.basis` against a scipy route
+Throughput of :func:`skysh.sh.basis.basis` against a scipy route
 ==========================================================
 
 Evaluates the real SH basis (Condon-Shortley phase, ``i = l (l + 1) + m``) on
-10^5 random unit vectors for bands 3, 7 and 16, once with :func:`skysh.sh.basis`
+10^5 random unit vectors for bands 3, 7 and 16, once with :func:`skysh.sh.basis.basis`
 and once the way a user would with scipy: ``scipy.special.sph_harm_y`` in a loop
 over (l, m >= 0), turned real as
 
@@ -33,7 +33,7 @@ from collections.abc import Callable
 import numpy as np
 from scipy.special import sph_harm_y
 
-from skysh import sh
+from skysh.sh import basis as sh
 
 BANDS: tuple[int, ...] = (3, 7, 16)
 """Band counts timed: low order (irradiance), the sky's default, the test maximum."""

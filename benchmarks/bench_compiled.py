@@ -43,7 +43,7 @@ from bench_runtime import interleaved_best
 
 from skysh import runtime
 from skysh.domain import SKY
-from skysh.preetham import luminance_scale_unchecked
+from skysh.model.preetham import luminance_scale_unchecked
 
 AGREEMENT: float = 1e-13
 """Largest difference kernel vs runtime, in units of the largest coefficient: the two sum

@@ -13,7 +13,7 @@ The issue's budgets, each printed beside its measurement:
 -   4..7 bands at most 2 ms per function (7-band skies without the Gibbs filter, and
     HDR lights, one call each and per item of a batch);
 -   the first ``dering`` call in a fresh process, import and set-up included, at most
-    20 ms: a subprocess that loads the runtime, then times ``from skysh import dering``
+    20 ms: a subprocess that loads the runtime, then times ``from skysh.post import dering``
     and one call (best of ``--fresh`` processes).
 
 Single-call cases take turns within each repeat (best of ``--repeats`` runs of about
@@ -34,7 +34,9 @@ import warnings
 import numpy as np
 from _timing import interleaved_best
 
-from skysh import SkySH, dering, sh
+from skysh import SkySH
+from skysh.post import dering
+from skysh.sh import basis as sh
 
 SUN: tuple[float, float, float] = (0.5, 3.0, 1.0)
 """(sun_zenith rad, turbidity, sun_azimuth rad) of the reference call and the timed sky."""
@@ -50,7 +52,7 @@ from skysh import SkySH
 sky = SkySH.load()
 c = sky.coefficients(0.5, 3.0, 1.0, bands=3, gibbs=False)
 t0 = time.perf_counter()
-from skysh import dering
+from skysh.post import dering
 dering.dering(c)
 print(time.perf_counter() - t0)
 """

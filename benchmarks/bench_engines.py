@@ -2,7 +2,7 @@
 Cost of an engine conversion next to the runtime call it follows
 ================================================================
 
-:func:`skysh.engines.convert` turns one frame's coefficients into an engine's
+:func:`skysh.engines.presets.convert` turns one frame's coefficients into an engine's
 numbers. The goal (issue 11): it adds at most 2 us to a 3-band call
 ``sky.coefficients(0.5, 3.0, 1.0, bands=3)``. This script measures, side by
 side in one run, for every engine:
@@ -41,7 +41,7 @@ from collections.abc import Callable
 
 from _timing import environment, interleaved_best
 
-from skysh import engines
+from skysh.engines import presets as engines
 from skysh.runtime import SkySH
 
 TARGET_ADDED_S: float = 2e-6

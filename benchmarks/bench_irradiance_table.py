@@ -13,7 +13,7 @@ best of ``--repeats`` short rounds):
 2.  ``table_batch``: the same on arrays of ``--batch`` frames vs the radiance call on
     the same arrays. Target: ratio <= 1.3.
 3.  ``old_pipeline``: for comparison, ``irradiance_table=False`` (the Gibbs-free sky,
-    deringed by :func:`skysh.dering.dering`, then convolved) vs the same radiance call.
+    deringed by :func:`skysh.post.dering.dering`, then convolved) vs the same radiance call.
 4.  ``table_lit``: for context, case 1 with ``sun=True, ground_albedo=0.3`` vs the
     radiance call with the same sun and ground.
 

@@ -2,8 +2,8 @@
 Per-call cost of the JavaScript module against the C export
 ===========================================================
 
-The JS module (:func:`skysh.export_js.module_source`, node) and the C header
-(:func:`skysh.export.export_source`, double, compiled with ``-O2``) evaluate the
+The JS module (:func:`skysh.export.js.module_source`, node) and the C header
+(:func:`skysh.export.c_like.export_source`, double, compiled with ``-O2``) evaluate the
 same calls, side by side in one run: the same random (sun zenith, turbidity,
 azimuth) inputs, a loop timed inside each language (``process.hrtime`` and
 ``clock_gettime(CLOCK_MONOTONIC)``), a checksum of every result kept so that no
@@ -17,7 +17,7 @@ Cases (each: ns per call in both languages and the ratio JS / C):
 -   ``irradiance-dering-3``: the same with deringing (the irradiance defaults);
 -   ``radiance-7``: 7 bands;
 -   ``out-3``: JS only differs: the result written into a preallocated ``out``;
--   ``engine-<name>-3``: the first engine of :mod:`skysh.engines` (when it exists).
+-   ``engine-<name>-3``: the first engine of :mod:`skysh.engines.presets` (when it exists).
 
 Timings are wall time: each process times one round of ``--calls`` calls after
 a warm-up round, C and JS processes take turns ``--repeats`` times (so both
@@ -43,8 +43,8 @@ from typing import Any
 import numpy as np
 
 from skysh import SkySH
-from skysh.export import export_source
-from skysh.export_js import module_source
+from skysh.export.c_like import export_source
+from skysh.export.js import module_source
 
 C_HARNESS: str = r"""
 #define _POSIX_C_SOURCE 199309L
@@ -170,7 +170,7 @@ def main() -> None:
     sky = SkySH.load()
     points = inputs(args.calls)
     try:
-        from skysh import engines
+        from skysh.engines import presets as engines
 
         engine = engines.ENGINES[0]
     except ModuleNotFoundError:

@@ -12,7 +12,7 @@ rounds find the quiet moments of a shared machine that a few long runs miss.
 2.  ``lit_radiance``: ``sky.coefficients(0.5, 3.0, 1.0, bands=3, sun=True,
     ground_albedo=0.3)`` vs the same call without the sun and the ground (the
     radiance defaults: Gibbs filter on, no deringing; the fused path of
-    :class:`skysh.lights.LitPlan`). Target: ratio <= 1.8.
+    :class:`skysh.lighting.lights.LitPlan`). Target: ratio <= 1.8.
 3.  ``lit_irradiance``: the same with ``irradiance=True`` (deringing on: the
     sky is deringed alone, then the sun and the ground are added). Target: ratio <= 1.8.
 4.  ``lit_rgb_albedo``: case 2 with ``ground_albedo=(0.2, 0.3, 0.4)``. Target: ratio <= 1.8.
@@ -25,7 +25,7 @@ rounds find the quiet moments of a shared machine that a few long runs miss.
 7.  ``anatomy``: for context, where case 2's added time goes, by option, each
     against the sky alone (case 2's baseline): ``sun=True`` alone and
     ``ground_albedo=0.3`` alone. Both take the fused scalar path of
-    :class:`skysh.lights.LitPlan` (a larger cosine and products that also give
+    :class:`skysh.lighting.lights.LitPlan` (a larger cosine and products that also give
     the sun's ln XYZ, the sky's c_10 and the sun's Ybar, one gather of sky, sun
     and ground terms, their rotation and one (N^2, 5) x (5, 3) product); the sun
     adds exp and the 3 x 3 colour matrix in Python floats, the ground E_h and

@@ -19,7 +19,7 @@ in one run, so the ratios do not depend on the machine's speed:
 3.  ``scalar_types``: one 3-band call with an int turbidity, numpy float64
     parameters and 0-d arrays vs the same call with Python floats (every real
     scalar takes the fast path). Target: ratio <= 1.3 each.
-4.  ``reference``: one call vs :func:`skysh.preetham.sky_sh` (the converged
+4.  ``reference``: one call vs :func:`skysh.model.preetham.sky_sh` (the converged
     quadrature projection the fit was made from). Target: >= 10^4 times faster.
     ``batched_speedup`` adds, for context, the same ratio per evaluation inside
     the batch of case 2 (not the target's measure).
@@ -50,7 +50,7 @@ from collections.abc import Callable
 import _timing
 import numpy as np
 
-from skysh import preetham
+from skysh.model import preetham
 from skysh.runtime import SkySH
 
 BANDS: tuple[int, ...] = (7, 3)

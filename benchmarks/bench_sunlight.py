@@ -13,7 +13,7 @@ load; the best of ``--repeats`` runs after a warm-up, each run about 0.2 s):
     ``SkySH.sun_light`` returns) vs the same sky call. Target: ratio <= 1.5.
 3.  ``batch``: ``sun.rgb`` on arrays of ``--batch`` points vs the 1-band sky
     call on the same arrays, per point. Target: ratio <= 1.5.
-4.  ``reference``: one fast-path call vs :func:`skysh.solar.illuminance_rgb`
+4.  ``reference``: one fast-path call vs :func:`skysh.model.solar.illuminance_rgb`
     (the spectral model the table was fitted to), for context: a speed-up.
 
 Timings are wall time: on a loaded machine run it a few times and compare.
@@ -36,8 +36,8 @@ from collections.abc import Callable
 import _timing
 import numpy as np
 
+from skysh.lighting.sunlight import SunLight
 from skysh.runtime import SkySH
-from skysh.sunlight import SunLight
 
 TARGET_RATIO: float = 1.5
 """Issue 15: ``sun_light`` <= 1.5 x a 1-band ``coefficients`` call."""
@@ -88,9 +88,7 @@ def main(argv: list[str] | None = None) -> int:
     }, args.repeats, run_seconds=0.0)
     emit("batch", t["rgb"], f"sky.coefficients on {args.batch} points, bands=1", t["sky"])
 
-    from skysh import (
-        solar,  # the spectral model (colour-science), after the runtime timings
-    )
+    from skysh.model import solar
 
     solar.illuminance_rgb(0.5, 3.0)  # warm-up: colour-science import, caches
     reference = min(timeit.repeat(lambda: solar.illuminance_rgb(0.5, 3.0), repeat=args.repeats, number=20)) / 20

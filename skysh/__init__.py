@@ -4,8 +4,8 @@ skysh: spherical-harmonic lighting of the Preetham sky for real-time renderers
 
 -   :class:`skysh.SkySH`: the per-frame runtime (load once, then
     ``sky.coefficients(sun_zenith, turbidity, sun_azimuth)``).
--   :mod:`skysh.sh`: real SH mathematics (basis, projection, rotation, irradiance).
--   :mod:`skysh.preetham`: the Preetham (1999) sky and its reference SH projection.
+-   :mod:`skysh.sh.basis`: real SH mathematics (basis, projection, rotation, irradiance).
+-   :mod:`skysh.model.preetham`: the Preetham (1999) sky and its reference SH projection.
 
 ``import skysh`` is light: it imports numpy only. colour-science is imported the
 first time the sky model or a colourspace conversion is used.

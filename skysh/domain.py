@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from skysh._checks import check_count, check_range, interval_text, number_text, short_repr
+from skysh.checks import check_count, check_range, interval_text, number_text, short_repr
 
 __all__ = [
     "KASTEN_COEFFICIENTS", "TRANSFORMS", "MAX_DEGREE", "TERM_ORDER",
@@ -231,7 +231,7 @@ SKY: Domain = Domain(
     name="sky",
     x=Variable("sun_zenith", "rad", (0.0, math.pi / 2.0)),
     y=Variable("turbidity", "", (2.5, 6.0), transform="log"),
-    source="skysh.coefficient_file.BASIS (Habel 2008 eq. 1)",
+    source="skysh.table.coefficient_file.BASIS (Habel 2008 eq. 1)",
 )
 """The sky tables' domain: sun zenith [0, pi/2] rad (zenith to horizon), x affine in it; turbidity [2.5, 6] (Habel
 2008 after Zotti et al. 2007: the model is unusable below 2.5), y affine in ln T."""
@@ -240,7 +240,7 @@ SUN: Domain = Domain(
     name="sun",
     x=Variable("sun_zenith", "rad", SKY.x.interval, transform="kasten", anchored=True),
     y=Variable("turbidity", "", SKY.y.interval, anchored=True),
-    source="skysh.sun_table.SUN_BASIS (Preetham 1999 appendix; Kasten 1966)",
+    source="skysh.table.sun_table.SUN_BASIS (Preetham 1999 appendix; Kasten 1966)",
 )
 """The sun table's domain: the sky's intervals (the same objects); x affine in Kasten's air mass over
 [m(0), m(pi/2)] = [0.99949, 36.510], y affine in the turbidity."""

@@ -8,20 +8,20 @@ The per-frame options, checked and resolved once
     default (None) resolved to a concrete value.
 -   :meth:`Options.resolve`: the one place the rules of the README's table
     "Defaults follow the intent" are written: :meth:`skysh.SkySH.coefficients`,
-    ``skysh coeffs`` (:mod:`skysh.cli`) and everything built on them take their
+    ``skysh coeffs`` (:mod:`skysh.app.cli`) and everything built on them take their
     flags from it.
 -   :func:`check_albedo` (and :data:`ALBEDO_RANGE`): the ``ground_albedo``
-    parameter, checked (also :mod:`skysh.lights`' names).
+    parameter, checked (also :mod:`skysh.lighting.lights`' names).
 
 The generated C, GLSL, HLSL and JavaScript runtimes restate the same rules in their
-own languages (``skysh_use_table``, ``useTable``: :mod:`skysh.export_lights`,
-:mod:`skysh.export_js_parts`); ``tests/test_options.py`` checks :meth:`Options.resolve`
-against an independent restatement of the table, ``tests/test_export_js.py`` and
-``tests/test_export.py`` the exports against the runtime.
+own languages (``skysh_use_table``, ``useTable``: :mod:`skysh.export.lights`,
+:mod:`skysh.export.js_parts`); ``tests/test_options.py`` checks :meth:`Options.resolve`
+against an independent restatement of the table, ``tests/export/test_export_js.py`` and
+``tests/export/test_export.py`` the exports against the runtime.
 
 A value is checked once, where it enters the public API: inner calls take the
 resolved :class:`Options` (or its fields) as checked values. ``import skysh.options``
-imports numpy and :mod:`skysh._checks` only.
+imports numpy and :mod:`skysh.checks` only.
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from skysh._checks import as_float_array, check_bands, check_flag, number_text, short_repr
+from skysh.checks import as_float_array, check_bands, check_flag, number_text, short_repr
 
 __all__ = ["ALBEDO_RANGE", "check_albedo", "Options"]
 
@@ -113,7 +113,7 @@ class Options:
         A colour-science RGB colourspace name, or None for the file's (its name is
         checked where it is first converted to, by colour-science).
     engine
-        An engine preset's name (:data:`skysh.engines.ENGINES`, checked there), or None for
+        An engine preset's name (:data:`skysh.engines.presets.ENGINES`, checked there), or None for
         skysh's own convention. Only its intent enters the rules: engines light diffusely.
     """
 
@@ -168,7 +168,7 @@ class Options:
             As :meth:`skysh.SkySH.coefficients`.
         engine
             None (skysh's convention) or an engine preset's name (a str; the name itself is
-            checked by :mod:`skysh.engines`).
+            checked by :mod:`skysh.engines.presets`).
         has_table
             Whether the coefficient file has the certified irradiance table
             (:attr:`skysh.SkySH.has_irradiance_table`).
@@ -196,7 +196,7 @@ class Options:
         gibbs = gibbs if gibbs is None else check_flag(gibbs, "gibbs")
         dering = dering if dering is None else check_flag(dering, "dering")
         if engine is not None and not isinstance(engine, str):
-            raise ValueError(f"engine must be None or an engine preset's name (skysh.engines.ENGINES), got "
+            raise ValueError(f"engine must be None or an engine preset's name (skysh.engines.presets.ENGINES), got "
                              f"{short_repr(engine)}")
         diffuse = irradiance or engine is not None  # the intent
         if irradiance_table is None:  # by intent: the table for diffuse light at 3 bands

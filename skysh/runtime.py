@@ -8,10 +8,10 @@ The per-frame runtime (Habel 2008, sections 3.1-3.3)
     the sun's azimuth (eq. 4), optionally deringes (Sloan 2017) and convolves
     with the clamped cosine (irradiance). ``sun=True`` adds the sun's disk as
     a windowed delta and ``ground_albedo`` a Lambertian ground lit by sky and
-    sun (:mod:`skysh.lights`: the order of the parts and the fused scalar
+    sun (:mod:`skysh.lighting.lights`: the order of the parts and the fused scalar
     path); :meth:`SkySH.sun_light` gives the sun as a directional light
     (direction and RGB illuminance, lux) from the file's sun table
-    (:class:`skysh.sunlight.SunLight`). Irradiance at 3 bands comes by default
+    (:class:`skysh.lighting.sunlight.SunLight`). Irradiance at 3 bands comes by default
     from the file's certified non-negative irradiance table instead
     (``docs/irradiance.md``): the same evaluation and rotation, no filter, no
     deringing search; ``irradiance_table=False`` gives the pipeline above.
@@ -53,8 +53,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from skysh import coefficient_file, ground, lights, poly, sh
-from skysh._checks import (
+from skysh.checks import (
     check_bands,
     check_dirs,
     check_flag,
@@ -65,9 +64,13 @@ from skysh._checks import (
     short_repr,
 )
 from skysh.domain import SKY
+from skysh.lighting import lights
+from skysh.lighting.sunlight import SunLight
+from skysh.model import ground
+from skysh.model.preetham import luminance_scale_unchecked as _luminance_scale
 from skysh.options import Options
-from skysh.preetham import luminance_scale_unchecked as _luminance_scale
-from skysh.sunlight import SunLight
+from skysh.sh import basis as sh
+from skysh.table import coefficient_file, poly
 
 __all__ = ["SkySH", "gibbs_factors"]
 
@@ -94,7 +97,7 @@ def _rotation_factors(phi: NDArray[np.float64], bands: int) -> NDArray[np.float6
     (n, 2 N): cos(m phi) for m = 0 .. N - 1, then sin(m phi), by angle addition from cos(phi), sin(phi).
 
     Two transcendental calls per point instead of 2 (N - 1); the recurrence adds about one
-    rounding per step (within 16 eps of direct cos and sin: tests/test_runtime.py).
+    rounding per step (within 16 eps of direct cos and sin: tests/runtime/test_runtime.py).
     """
     a = np.fmod(phi, _TWO_PI)  # reduced, so the starting values are accurate
     rot = np.empty((2 * bands, a.shape[0]))  # rows: contiguous writes
@@ -223,9 +226,9 @@ class SkySH:
     @classmethod
     def load(cls, path: str | Path | None = None) -> SkySH:
         """Load the shipped coefficient file (or ``path``, a str or os.PathLike naming a file), checked (see
-        :func:`skysh.coefficient_file.read`, whose CoefficientFileError, a ValueError, names ``path`` when it is
+        :func:`skysh.table.coefficient_file.read`, whose CoefficientFileError, a ValueError, names ``path`` when it is
         neither, e.g. bytes or a number)."""
-        sky_table = coefficient_file.read(path)  # checks path first, as skysh._npz.as_path does
+        sky_table = coefficient_file.read(path)  # checks path first, as skysh.table.container.as_path does
         return cls(sky_table, coefficient_file.default_path() if path is None else Path(path))
 
     @property
@@ -261,19 +264,19 @@ class SkySH:
             (never the sun). Default (None): on for radiance (it halves the ringing), off for
             irradiance (it blurs: ``python tools/error_report.py --sections 9``).
         dering
-            Window the sky so its irradiance is non-negative (Sloan 2017, :func:`skysh.dering.dering`;
+            Window the sky so its irradiance is non-negative (Sloan 2017, :func:`skysh.post.dering.dering`;
             one window for all channels), after the filter and the rotation, before the sun and
             the ground (each non-negative by construction). Default (None): on for irradiance only.
         irradiance
             Return irradiance E (clamped-cosine convolution, cd/m^2 x sr: lux for the luminance);
-            engines wanting E / pi: :mod:`skysh.engines`.
+            engines wanting E / pi: :mod:`skysh.engines.presets`.
         colourspace
             colour-science RGB colourspace name; default the file's (linear sRGB).
         sun, ground_albedo
-            Add the sun's disk (:meth:`sun_light`), a delta windowed by :func:`skysh.solar.sun_window`;
+            Add the sun's disk (:meth:`sun_light`), a delta windowed by :func:`skysh.model.solar.sun_window`;
             a Lambertian ground below the horizon of albedo a number or an RGB triple (output
             colourspace) in [0, 1], radiance albedo x E_h / pi with E_h the exact irradiance of the
-            horizontal ground by the sky (and the sun). Default 0: black. Order: :mod:`skysh.lights`.
+            horizontal ground by the sky (and the sun). Default 0: black. Order: :mod:`skysh.lighting.lights`.
         irradiance_table
             The sky from the file's certified 3-band irradiance table (``docs/irradiance.md``: the
             irradiance closest to the truth subject to being non-negative everywhere), evaluated
@@ -284,7 +287,7 @@ class SkySH:
             ``colourspace`` whose matrix has a negative entry (a no-op where non-negative).
 
         Returns (N * N, 3), or (..., N * N, 3) for array parameters (broadcast; empty: (0, N * N, 3);
-        at most ``skysh._checks.MAX_ARRAY_ELEMENTS`` values in its largest array); radiance in
+        at most ``skysh.checks.MAX_ARRAY_ELEMENTS`` values in its largest array); radiance in
         cd/m^2 (R = G = B = Y for the colourspace's white), linear RGB.
 
         Raises ValueError for a parameter outside its range (named, with the range), not finite, not
@@ -414,7 +417,7 @@ class SkySH:
     def _colour_matrix(self, colourspace: str) -> NDArray[np.float64]:
         matrix = self._colour_matrices.get(colourspace)
         if matrix is None:
-            from skysh.preetham import (
+            from skysh.model.preetham import (
                 rgb_from_xyz_matrix,  # colour-science loads here, on first use
             )
 
@@ -426,11 +429,11 @@ class SkySH:
         return matrix
 
     # ------------------------------------------------------------------ #
-    # The sun and the ground (skysh.lights)
+    # The sun and the ground (skysh.lighting.lights)
     # ------------------------------------------------------------------ #
     def _lit_plan(self, bands: Any, gibbs: bool, table: bool = False, lobe: bool = False) -> lights.LitPlan:
-        """The :class:`skysh.lights.LitPlan` of a setting, built on first use (``lobe``: irradiance out, its
-        clamped-cosine factors folded into the tables: only for :meth:`skysh.lights.LitPlan.fused`)."""
+        """The :class:`skysh.lighting.lights.LitPlan` of a setting, built on first use (``lobe``: irradiance out, its
+        clamped-cosine factors folded into the tables: only for :meth:`skysh.lighting.lights.LitPlan.fused`)."""
         plan = self._lit_plans.get((bands, gibbs, table, lobe)) if type(bands) is int else None
         if plan is None:
             bands = check_bands(bands, high=self.bands)
@@ -447,7 +450,7 @@ class SkySH:
     def _lit(self, frame: tuple, scalar: bool, bands: Any, gibbs: bool, dering: bool, colourspace: str | None,
              sun: bool, albedo: tuple[float, float, float] | None, table: bool = False,
              irradiance: bool = False) -> NDArray:
-        """SH of sky + sun + ground, in the output colourspace (the order of :mod:`skysh.lights`); radiance,
+        """SH of sky + sun + ground, in the output colourspace (the order of :mod:`skysh.lighting.lights`); radiance,
         or irradiance (the clamped-cosine convolution last) when ``irradiance``.
 
         ``frame``: (sun_zenith, turbidity, sun_azimuth), Python floats when ``scalar``. ``table``: the sky
@@ -526,7 +529,7 @@ class SkySH:
         -------
         direction, rgb
             ``(sin ts cos phi, sin ts sin phi, cos ts)`` (Z up) and the sun's direct
-            normal illuminance (Preetham 1999 appendix, fitted: :class:`skysh.sunlight.SunLight`),
+            normal illuminance (Preetham 1999 appendix, fitted: :class:`skysh.lighting.sunlight.SunLight`),
             lux per channel: an engine's directional light of that colour and
             intensity. Each (3,) for real scalars, else (..., 3) over the broadcast
             shape. Near the horizon a channel outside the gamut is slightly
@@ -635,8 +638,8 @@ def _albedo_key(albedo: Any) -> tuple[float, float, float] | None:
 
 
 def _dering(coeffs: NDArray[np.float64], target: str = "irradiance") -> NDArray[np.float64]:
-    """:func:`skysh.dering.dering`'s coefficients (imported on first use); ``target="radiance"`` for irradiance in."""
-    from skysh.dering import dering
+    """:func:`skysh.post.dering.dering`'s coefficients (imported on first use); ``target="radiance"`` for irradiance in."""
+    from skysh.post.dering import dering
 
     return dering(coeffs, target)[0]
 

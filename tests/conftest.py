@@ -59,7 +59,8 @@ import pytest
 from background import ToolRuns, modules_stay_whole
 from scipy.special import sph_harm_y
 
-from skysh import irradiance_fit, sh
+from skysh.sh import basis as sh
+from skysh.table import irradiance_fit
 
 if TYPE_CHECKING:  # the runtime is imported by the fixture that loads it, not by collecting the tests
     from skysh.runtime import SkySH
@@ -74,7 +75,7 @@ EPS: float = float(np.finfo(np.float64).eps)
 """Machine epsilon of float64, 2.2e-16: the unit of the rounding allowances."""
 
 L_OF: np.ndarray = np.repeat(np.arange(64), 2 * np.arange(64) + 1)
-"""Band l of every flat SH index i = l (l + 1) + m, for all 64 bands skysh.sh takes (4,096
+"""Band l of every flat SH index i = l (l + 1) + m, for all 64 bands skysh.sh.basis takes (4,096
 entries); ``L_OF[: bands * bands]`` is the table of a smaller band count."""
 L_OF.flags.writeable = False
 
@@ -160,7 +161,7 @@ def sky_samples(n: int, bands: int = 3, gibbs: bool = True) -> np.ndarray:
     The reference projection ``preetham.sky_sh`` (independent of the runtime's fitted file),
     with the runtime's zonal Gibbs filter ``c(l, 0) *= sinc(l / N)`` (Habel eq. 5) when ``gibbs``.
     """
-    from skysh import preetham
+    from skysh.model import preetham
 
     rng = np.random.default_rng(44)
     zen = np.concatenate([[0.0, math.pi / 2, 0.0, math.pi / 2], rng.uniform(0, math.pi / 2, n - 4)])
@@ -335,10 +336,10 @@ probe exactly (one-entry sums); any real change of convention moves it by O(1), 
 
 
 def engine_cases() -> list[tuple[str, int]]:
-    """(engine, bands) for every band count each engine of skysh.engines takes (engine_map accepts it);
-    none while skysh.engines does not exist."""
+    """(engine, bands) for every band count each engine of skysh.engines.presets takes (engine_map accepts it);
+    none while skysh.engines.presets does not exist."""
     try:
-        from skysh import engines
+        from skysh.engines import presets as engines
     except ModuleNotFoundError:
         return []
     cases = []
@@ -354,7 +355,7 @@ def engine_cases() -> list[tuple[str, int]]:
 
 def is_padded_identity(name: str, bands: int) -> bool:
     """True when the engine's map is skysh's numbers as they are (zero-padded): no negative control can fail."""
-    from skysh import engines
+    from skysh.engines import presets as engines
 
     emap = engines.engine_map(name, bands)
     matrix = np.asarray(emap.matrix)
@@ -365,7 +366,7 @@ def is_padded_identity(name: str, bands: int) -> bool:
 
 
 def canonical_json(value: Any) -> bytes:
-    """Canonical JSON as skysh.coefficient_file's docstring defines it, typed here (sorted keys, no
+    """Canonical JSON as skysh.table.coefficient_file's docstring defines it, typed here (sorted keys, no
     spaces, ASCII, no NaN)."""
     return json.dumps(value, sort_keys=True, separators=(",", ":"), ensure_ascii=True, allow_nan=False).encode("ascii")
 
@@ -473,7 +474,7 @@ Exported = Callable[..., str]
 def exported(sky: SkySH) -> Exported:
     """``export_source(sky, language, **options)`` of the session's :func:`sky`, each distinct call made once (the
     texts are immutable; a test of ``export_source`` itself calls it directly)."""
-    from skysh.export import export_source
+    from skysh.export.c_like import export_source
 
     return functools.lru_cache(maxsize=None)(functools.partial(export_source, sky))
 

@@ -14,7 +14,7 @@ The package, the tools and ``benchmarks/`` are also held to the "no reach-ins" r
 
 -   no ``from M import _name`` where ``M`` is another first-party module (``skysh``, its
     modules, the tools' modules and packages, the benchmarks' modules) and ``_name`` is not
-    itself a module (``from skysh import _checks`` imports a module and is fine);
+    itself a module (``from skysh import checks as _checks`` imports a module and is fine);
 -   no ``M._name`` (nor ``getattr``/``setattr``/``delattr`` with ``"_name"``) where ``M`` is a
     name bound by an import of another first-party module, or of an object taken from one
     (``SkySH._x``); dunders (``__name__``) are public;
@@ -107,7 +107,7 @@ def python_files(folders: Iterable[str]) -> list[Path]:
 
 
 def module_name(path: Path) -> str:
-    """The dotted name a file is imported under: ``skysh.fit``, ``report.common``, ``bench_runtime``."""
+    """The dotted name a file is imported under: ``skysh.table.fit``, ``report.common``, ``bench_runtime``."""
     rel = path.relative_to(ROOT).with_suffix("")
     parts = list(rel.parts)
     if parts[0] in ("tools", "benchmarks"):  # both folders are put on sys.path, not imported as packages
@@ -209,7 +209,7 @@ def _bindings(tree: ast.AST, own: str, is_package: bool, modules: frozenset[str]
 
 
 def _dotted(node: ast.expr, bound: dict[str, str]) -> str | None:
-    """The first-party origin an expression names (``sky`` -> None, ``skysh.fit`` -> ``skysh.fit``)."""
+    """The first-party origin an expression names (``sky`` -> None, ``skysh.table.fit`` -> ``skysh.table.fit``)."""
     if isinstance(node, ast.Name):
         return bound.get(node.id)
     if isinstance(node, ast.Attribute):
@@ -295,15 +295,15 @@ NOT_ZENITH: re.Pattern[str] = re.compile(r"turbidity|azimuth|albedo|cos|variable
 
 def prose_domains() -> dict[str, dict[tuple[float, float], str]]:
     """The domains prose may state, by quantity: each from the constant that owns it."""
-    from skysh import hosek, preetham
     from skysh.domain import SKY
+    from skysh.model import hosek, preetham
 
     zenith = {SKY.x.interval: "skysh.domain.SKY.x (also preetham's and hosek's SUN_ZENITH_RANGE)",
-              (0.0, math.pi): "a zenith angle's whole range (skysh.sun: the sun may be below the horizon)"}
+              (0.0, math.pi): "a zenith angle's whole range (skysh.lighting.sun: the sun may be below the horizon)"}
     return {
         "turbidity": {SKY.y.interval: "skysh.domain.SKY.y (the fitted domain)",
-                      preetham.TURBIDITY_RANGE: "skysh.preetham.TURBIDITY_RANGE (Preetham's model)",
-                      hosek.TURBIDITY_RANGE: "skysh.hosek.TURBIDITY_RANGE (Hosek-Wilkie's model)"},
+                      preetham.TURBIDITY_RANGE: "skysh.model.preetham.TURBIDITY_RANGE (Preetham's model)",
+                      hosek.TURBIDITY_RANGE: "skysh.model.hosek.TURBIDITY_RANGE (Hosek-Wilkie's model)"},
         "zenith": zenith,
         "zenith in degrees": {(math.degrees(a), math.degrees(b)): f"{why}, in degrees" for (a, b), why in zenith.items()},
     }
@@ -419,8 +419,8 @@ def test_prose_scan_finds_the_written_domains():
 
 
 def test_startup_copies_match_their_source():
-    """Values :mod:`skysh.cli` repeats so that building its parser imports nothing equal their source."""
-    from skysh import cli, render
+    """Values :mod:`skysh.app.cli` repeats so that building its parser imports nothing equal their source."""
+    from skysh.app import cli, render
 
     assert cli.RENDER_WIDTH_RANGE == render.PANEL_WIDTH_RANGE
     assert cli.DEFAULT_RENDER_WIDTH == render.DEFAULT_PANEL_WIDTH
@@ -452,44 +452,44 @@ def test_negative_control_complexity():
 
 
 SYNTHETIC_OFFENDER: str = """
-import skysh.dering
-import skysh.fit as fitting
-from skysh import runtime, sh, _checks
-from skysh.preetham import _luminance_scale, luminance
+import skysh.post.dering
+import skysh.table.fit as fitting
+from skysh import runtime; from skysh.sh import basis as sh; from skysh import checks as _checks
+from skysh.model.preetham import _luminance_scale, luminance
 from skysh.runtime import SkySH
 from report.common import _helper
 
 def f(sky, obj, monkeypatch):
     a = fitting._solve(1)                       # module private through an alias
-    b = skysh.dering._NEWTON_STEPS              # through the dotted package path
+    b = skysh.post.dering._NEWTON_STEPS              # through the dotted package path
     c = runtime._X_SCALE, SkySH._private        # module and class privates
     d = sky._plans                              # a known instance private
     e = obj._lmax                               # an instance private a skysh class assigns
-    monkeypatch.setattr(skysh.dering, "_NEWTON_STEPS", 3)
-    ok = sh.__name__, _checks.check_positive_int, luminance, sh.eval_basis
+    monkeypatch.setattr(skysh.post.dering, "_NEWTON_STEPS", 3)
+    ok = sh.__name__, checks.check_positive_int, luminance, sh.eval_basis
     return a, b, c, d, e, ok
 """
 """A module that reaches into other modules' privates in every way the checker knows (and a few ways it must allow)."""
 
 
 def test_negative_control_reach_ins():
-    modules = frozenset({"skysh", "skysh.dering", "skysh.fit", "skysh.runtime", "skysh.sh", "skysh._checks",
-                         "skysh.preetham", "report", "report.common", "tools_module"})
+    modules = frozenset({"skysh", "skysh.post.dering", "skysh.table.fit", "skysh.runtime", "skysh.sh.basis", "skysh.checks",
+                         "skysh.model.preetham", "report", "report.common", "tools_module"})
     found = reach_ins("m.py", ast.parse(SYNTHETIC_OFFENDER), "tools_module", modules=modules,
                       instance_names={"_lmax": "skysh.runtime"})
     whats = sorted(v.what for v in found)
     expected = [
-        "from report.common import _helper", "from skysh.preetham import _luminance_scale",
-        "fitting._solve", "skysh.dering._NEWTON_STEPS", "runtime._X_SCALE", "SkySH._private",
-        "sky._plans", "obj._lmax", "setattr(skysh.dering, '_NEWTON_STEPS')",
+        "from report.common import _helper", "from skysh.model.preetham import _luminance_scale",
+        "fitting._solve", "skysh.post.dering._NEWTON_STEPS", "runtime._X_SCALE", "SkySH._private",
+        "sky._plans", "obj._lmax", "setattr(skysh.post.dering, '_NEWTON_STEPS')",
     ]
     for needle in expected:
         assert any(w.startswith(needle) for w in whats), (needle, whats)
-    assert len(found) == len(expected), whats  # nothing else: dunders, public names, `from skysh import _checks`
+    assert len(found) == len(expected), whats  # nothing else: dunders, public names, `from skysh import checks as _checks`
     # a module's own privates, and a name it assigns to its own objects, are its business
-    own = "import skysh.fit as me\nclass K:\n    def __init__(self):\n        self._plans = 1\n" \
+    own = "import skysh.table.fit as me\nclass K:\n    def __init__(self):\n        self._plans = 1\n" \
           "    def g(self, other):\n        return other._plans, self._plans\n"
-    assert reach_ins("m.py", ast.parse(own), "skysh.fit", modules=modules, instance_names={}) == []
+    assert reach_ins("m.py", ast.parse(own), "skysh.table.fit", modules=modules, instance_names={}) == []
 
 
 def test_negative_control_private_methods():

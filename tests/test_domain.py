@@ -16,8 +16,12 @@ import math
 import numpy as np
 import pytest
 
-from skysh import cli, coefficient_file, domain, lights, poly, preetham, runtime, solar, sun_table, sunlight
+from skysh import domain, runtime
+from skysh.app import cli
 from skysh.domain import SKY, SUN
+from skysh.lighting import lights, sunlight
+from skysh.model import preetham, solar
+from skysh.table import coefficient_file, poly, sun_table
 
 
 class TestRegistry:
@@ -56,7 +60,7 @@ class TestRegistry:
         assert cli._sun_zenith_range() == SKY.x.interval_text(degrees=True) == "[0, 90]"
 
     def test_the_exports_constants(self) -> None:
-        from skysh.export_tables import export_tables
+        from skysh.export.tables import export_tables
 
         tables = export_tables(runtime.SkySH.load(), 3)
         assert (tables.x_scale, tables.x_shift, tables.y_scale, tables.y_shift) == (

@@ -359,7 +359,7 @@ class TestWiring:
                                                     tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
                                                     error: type[Exception]) -> None:
         def broken(ctx: object) -> dict:
-            raise error("skysh.render has no attribute 'render_image'")
+            raise error("skysh.app.render has no attribute 'render_image'")
 
         monkeypatch.setattr(report.s10_pictures, "compute", broken)
         with pytest.raises(error, match="render_image"):
@@ -428,12 +428,12 @@ class TestWithoutCvxpy:
         assert SKIPPED in (tmp_path / "report.md").read_text(encoding="utf-8")
 
     def test_the_solver_section_asks_the_solver_helper(self, report: types.SimpleNamespace) -> None:
-        from skysh import irradiance_fit
+        from skysh.table import irradiance_fit
 
         assert report.s11_irradiance_table.missing_packages is irradiance_fit.missing_solver_packages
         assert report.run.missing_packages(SOLVER_SECTION) == irradiance_fit.missing_solver_packages()
         assert [k for k in report.run.SECTIONS if hasattr(report.run.SECTIONS[k], report.run.MISSING_PACKAGES)] \
-            == [SOLVER_SECTION]  # the only section that imports cvxpy (through skysh.irradiance_fit)
+            == [SOLVER_SECTION]  # the only section that imports cvxpy (through skysh.table.irradiance_fit)
 
 
 # --------------------------------------------------------------------------- #
@@ -452,7 +452,8 @@ class TestHelpers:
             np.testing.assert_allclose(got["e_max"], l1, rtol=EXACT)
 
     def test_full_from_half_places_the_m_nonnegative_rows(self, report: types.SimpleNamespace) -> None:
-        from skysh import coefficient_file, sh
+        from skysh.sh import basis as sh
+        from skysh.table import coefficient_file
 
         half = np.arange(28 * 2, dtype=float).reshape(28, 2) + 1.0
         full = report.common.full_from_half(half, 7)
@@ -571,7 +572,8 @@ function by at most its curvature times the squared half-spacing: well under 1e-
 @functools.cache
 def irradiance_64(sun_zenith: float, turbidity: float, sun_azimuth: float) -> np.ndarray:
     """sh.irradiance of preetham.sky_sh at 64 bands (4,096 coefficients), computed once per sky."""
-    from skysh import preetham, sh
+    from skysh.model import preetham
+    from skysh.sh import basis as sh
 
     return sh.irradiance(preetham.sky_sh(sun_zenith, turbidity, 64, sun_azimuth))
 
@@ -661,7 +663,7 @@ class TestIrradianceTableSection:
         assert data["results"][s11.study.runtime_name(True)]["error"].max() > s11.THRESHOLD
 
     def test_a_wrong_method_exceeds_the_bound_and_lowest_is_the_minimum(self, report: types.SimpleNamespace) -> None:
-        from skysh import sh
+        from skysh.sh import basis as sh
 
         study = report.s11_irradiance_table.study
         ev = study.Evaluator(study.sky_points((30.0, 85.0), (3.0,)), None, 12, 16, log=lambda message: None,
@@ -687,7 +689,7 @@ class TestIrradianceTableSection:
         assert not list(tmp_path.iterdir())  # the quick run caches nothing
 
     def test_continuous_window_at_the_table_sizes_is_the_table(self, report: types.SimpleNamespace) -> None:
-        from skysh import dering
+        from skysh.post import dering
 
         study = report.s11_irradiance_table.study
         rows = study.continuous_window(np.array(dering.SEED_WINDOW_SIZES))
@@ -742,7 +744,7 @@ class TestSceneIrradianceSection:
     @pytest.mark.parametrize(("sun_zenith", "azimuth_error"), [(1.2, 0.0), (1.2, 0.5)])
     def test_brute_force_sky_against_the_64_band_projection(self, report: types.SimpleNamespace, sun_zenith: float,
                                                             azimuth_error: float) -> None:
-        from skysh import sh
+        from skysh.sh import basis as sh
 
         s12 = report.s12_scene_irradiance
         normals = fibonacci_sphere(96)
@@ -753,7 +755,7 @@ class TestSceneIrradianceSection:
         assert (error <= BRUTE_VS_SH) == (azimuth_error == 0.0), f"error {error:.2e} of the mean"
 
     def test_ground_is_exact_and_a_wrong_albedo_is_caught(self, report: types.SimpleNamespace, quick_ctx: object) -> None:
-        from skysh import sh
+        from skysh.sh import basis as sh
 
         s12 = report.s12_scene_irradiance
         scene = s12.SIZES["quick"].scenes[1]

@@ -29,7 +29,9 @@ from pathlib import Path
 
 import pytest
 
-from skysh import cli, coefficient_file, files
+from skysh import files
+from skysh.app import cli
+from skysh.table import coefficient_file
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -67,7 +69,7 @@ def run_cli(argv: list[str], capsys: pytest.CaptureFixture) -> tuple[int, str, s
 def run_limited(argv: list[str], cwd: Path) -> subprocess.CompletedProcess:
     """``python -m skysh argv`` with a file-size limit of :data:`SIZE_LIMIT_BYTES`."""
     code = (f"import resource, sys; resource.setrlimit(resource.RLIMIT_FSIZE, ({SIZE_LIMIT_BYTES}, {SIZE_LIMIT_BYTES}))\n"
-            "from skysh.cli import main; sys.exit(main(sys.argv[1:]))")
+            "from skysh.app.cli import main; sys.exit(main(sys.argv[1:]))")
     return subprocess.run([sys.executable, "-c", code, *argv], capture_output=True, text=True, cwd=cwd,
                           timeout=SUBPROCESS_TIMEOUT_S, check=False)
 

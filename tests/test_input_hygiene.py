@@ -36,9 +36,15 @@ from typing import Any
 import numpy as np
 import pytest
 
-from skysh import cli, domain, hazel, poly, preetham, render, sh, sun
-from skysh._checks import MAX_ARRAY_ELEMENTS
+from skysh import domain
+from skysh.app import cli, render
+from skysh.checks import MAX_ARRAY_ELEMENTS
+from skysh.lighting import sun
+from skysh.model import preetham
+from skysh.post import hazel
 from skysh.runtime import SkySH, gibbs_factors
+from skysh.sh import basis as sh
+from skysh.table import poly
 
 BIG: int = MAX_ARRAY_ELEMENTS + 1
 """A length just past the documented maximum: a zero-stride view of it costs nothing to build."""
@@ -326,7 +332,7 @@ def _sky_row(name: str, method: str, valid: dict[str, Any], kinds: dict[str, Kin
 
 
 ROWS: list[Row] = [
-    # skysh.sh
+    # skysh.sh.basis
     Row("sh.n_coeffs", lambda: sh.n_coeffs, dict(bands=3), dict(bands=Count(1, 64))),
     Row("sh.index", lambda: sh.index, dict(l=2, m=1), dict(l=Count(0, 63), m=Count(-2, 2))),
     Row("sh.lm", lambda: sh.lm, dict(i=5), dict(i=Count(0, 64 * 64 - 1))),
@@ -357,7 +363,7 @@ ROWS: list[Row] = [
     Row("sh.irradiance", lambda: sh.irradiance, dict(coeffs=C9), dict(coeffs=Coeffs())),
     Row("sh.to_y_up", lambda: sh.to_y_up, dict(coeffs=C9), dict(coeffs=Coeffs())),
     Row("sh.from_y_up", lambda: sh.from_y_up, dict(coeffs=C9), dict(coeffs=Coeffs())),
-    # skysh.poly
+    # skysh.table.poly
     Row("poly.scale", lambda: poly.scale, dict(sun_zenith=0.5, turbidity=3.0, log_turbidity=True),
         dict(sun_zenith=Number(), turbidity=Number(low=5e-324), log_turbidity=Flag())),
     Row("poly.chebyshev", lambda: poly.chebyshev, dict(x=0.3, degree=5), dict(x=Number(), degree=Count(0, domain.MAX_DEGREE))),
@@ -366,7 +372,7 @@ ROWS: list[Row] = [
         dict(i=Count(0, 13), j=Count(0, 7), degrees=PAIR)),
     Row("poly.design", lambda: poly.design, dict(sun_zenith=0.5, turbidity=3.0, degrees=(3, 2), log_turbidity=True),
         dict(sun_zenith=Number(), turbidity=Number(low=5e-324), degrees=PAIR, log_turbidity=Flag())),
-    # skysh.preetham
+    # skysh.model.preetham
     Row("preetham.perez_coefficients", lambda: preetham.perez_coefficients, dict(turbidity=3.0),
         dict(turbidity=Number(1.7, 10.0))),
     Row("preetham.perez", lambda: preetham.perez,
@@ -396,7 +402,7 @@ ROWS: list[Row] = [
     Row("preetham.sky_minimum", lambda: preetham.sky_minimum, dict(SUN),
         dict(sun_zenith=Number(0.0, math.pi / 2, array=False), turbidity=Number(1.7, 10.0, array=False),
              colourspace=COLOURSPACE)),
-    # skysh.sun
+    # skysh.lighting.sun
     Row("sun.position", lambda: sun.position, dict(latitude=48.2, longitude=16.4, when=WHEN, refraction=True),
         dict(latitude=Number(-90.0, 90.0), longitude=Number(-180.0, 180.0), when=When(), refraction=Flag())),
     Row("sun.position_unchecked", lambda: sun.position_unchecked, dict(latitude=48.2, longitude=16.4, when=WHEN),
@@ -404,7 +410,7 @@ ROWS: list[Row] = [
     Row("sun.ephemeris", lambda: sun.ephemeris, dict(when=WHEN), dict(when=When())),
     Row("sun.compass_to_frame", lambda: sun.compass_to_frame, dict(azimuth=1.0), dict(azimuth=Number())),
     Row("sun.frame_to_compass", lambda: sun.frame_to_compass, dict(azimuth=1.0), dict(azimuth=Number())),
-    # skysh.hazel (library functions)
+    # skysh.post.hazel (library functions)
     Row("hazel.to_normalised", lambda: hazel.to_normalised, dict(coeffs=C9), dict(coeffs=Coeffs())),
     Row("hazel.from_normalised", lambda: hazel.from_normalised,
         dict(R0=np.ones(3), R1=np.zeros((3, 3)), R2=np.zeros((3, 3, 3))),
@@ -416,7 +422,7 @@ ROWS: list[Row] = [
     Row("hazel.geomerics_parameters", lambda: hazel.geomerics_parameters, dict(coeffs=C9), dict(coeffs=Coeffs())),
     Row("hazel.irradiance_l1_nonlinear", lambda: hazel.irradiance_l1_nonlinear, dict(coeffs=C9, normals=Z),
         dict(coeffs=Coeffs(), normals=Dirs())),
-    # skysh.render
+    # skysh.app.render
     Row("render.latlong_dirs", lambda: render.latlong_dirs, dict(width=32), dict(width=Count(2, render.MAX_LATLONG_WIDTH))),
     Row("render.tone_map", lambda: render.tone_map, dict(rgb=np.ones((2, 3)), exposure=1.0),
         dict(rgb=RGB_TRIPLE, exposure=Number(5e-324, array=False))),
@@ -468,95 +474,95 @@ def _other(module: str, function: str) -> Callable[[], Callable[..., Any]]:
 
 
 OTHER_ROWS: list[Row] = [
-    # skysh.dering
-    Row("dering.sinc4_window", _other("dering", "sinc4_window"), dict(cutoff=5.6, bands=3),
+    # skysh.post.dering
+    Row("dering.sinc4_window", _other("post.dering", "sinc4_window"), dict(cutoff=5.6, bands=3),
         dict(cutoff=Values((("bool", True), ("nan", math.nan), ("zero", 0.0), ("negative", -1.0), ("text", "5"),
                             ("none", None), ("array", np.array([5.6, 5.6])), ("huge-int", 10**400),
                             ("huge-negative-int", -10**400), ("huger-int", 10**5000))), bands=Count(1))),
-    Row("solar.sun_window_family", _other("solar", "sun_window_family"), dict(cutoff=5.6, attenuation=0.5, bands=3),
+    Row("solar.sun_window_family", _other("model.solar", "sun_window_family"), dict(cutoff=5.6, attenuation=0.5, bands=3),
         dict(cutoff=Values((("bool", True), ("nan", math.nan), ("zero", 0.0), ("negative", -1.0), ("text", "5"),
                             ("none", None), ("huge-int", 10**400), ("huger-int", 10**5000))),
              attenuation=Values((("nan", math.nan), ("above", 1.5), ("text", "0.5"))), bands=Count(1))),
-    Row("dering.delta_minimum", _other("dering", "delta_minimum"), dict(scales=[1.0, 0.9, 0.7], target="irradiance"),
+    Row("dering.delta_minimum", _other("post.dering", "delta_minimum"), dict(scales=[1.0, 0.9, 0.7], target="irradiance"),
         dict(scales=Values((("nan", [1.0, math.nan]), ("text", "abc"), ("none", None), ("empty", []),
                             ("matrix", np.ones((3, 3))), ("bool", [True, True]))),
              target=Choice(("irradiance", "radiance")))),
-    Row("dering.linear_attenuation", _other("dering", "linear_attenuation"), dict(cutoff=5.6, bands=3),
+    Row("dering.linear_attenuation", _other("post.dering", "linear_attenuation"), dict(cutoff=5.6, bands=3),
         dict(cutoff=Values((("nan", math.nan), ("zero", 0.0), ("text", "5"), ("none", None), ("huge-int", 10**400))),
              bands=Count(1, 7),
              target=Choice(("irradiance", "radiance")))),
-    Row("dering.window_table", _other("dering", "window_table"), dict(bands=3),
+    Row("dering.window_table", _other("post.dering", "window_table"), dict(bands=3),
         dict(bands=Count(1, 7), target=Choice(("irradiance", "radiance")))),
-    # skysh.shmin
-    Row("shmin.exact_min", _other("shmin", "exact_min"), dict(coeffs=C9, return_dirs=False),
+    # skysh.sh.minimum
+    Row("shmin.exact_min", _other("sh.minimum", "exact_min"), dict(coeffs=C9, return_dirs=False),
         dict(coeffs=Coeffs(), return_dirs=Flag())),
-    Row("shmin.sphere_quadratic", _other("shmin", "sphere_quadratic"), dict(coeffs=C9[:, 0]), dict(coeffs=Values((
+    Row("shmin.sphere_quadratic", _other("sh.minimum", "sphere_quadratic"), dict(coeffs=C9[:, 0]), dict(coeffs=Values((
         ("nan", np.full(9, math.nan)), ("wrong-count", np.ones(5)), ("scalar", 1.0), ("text", "c"), ("none", None),
         ("empty", np.empty(0)), ("bool-array", np.ones(9, bool)))))),
-    Row("dering.dering", _other("dering", "dering"), dict(coeffs=C9),
+    Row("dering.dering", _other("post.dering", "dering"), dict(coeffs=C9),
         dict(coeffs=Coeffs(), target=Choice(("irradiance", "radiance")), method=Choice(("table", "exact", "sinc4")),
              return_failed=Flag())),
-    Row("dering.directional_light_sh", _other("dering", "directional_light_sh"),
+    Row("dering.directional_light_sh", _other("post.dering", "directional_light_sh"),
         dict(direction=[0.0, 0.0, 1.0], colour=[1.0, 1.0, 1.0], bands=3),
         dict(direction=Dirs(), colour=Number(), bands=Count(1, 3),  # the default window: 3 factors
              window=Values((("short", [1.0]), ("nan", [1.0, math.nan, 1.0]), ("text", "w"), ("empty", []),
                             ("matrix", np.ones((3, 3))))))),
-    Row("dering.directional_light_sh(window of 64)", _other("dering", "directional_light_sh"),
+    Row("dering.directional_light_sh(window of 64)", _other("post.dering", "directional_light_sh"),
         dict(direction=[0.0, 0.0, 1.0], colour=[1.0, 1.0, 1.0], bands=3, window=np.ones(64)),
         dict(bands=Count(1, 64))),
-    # skysh.engines
-    Row("engines.engine_map", _other("engines", "engine_map"), dict(engine="threejs", bands=3),
+    # skysh.engines.presets
+    Row("engines.engine_map", _other("engines.presets", "engine_map"), dict(engine="threejs", bands=3),
         dict(engine=Choice(("threejs", "filament", "unity")), bands=Count(1, 64))),
-    Row("engines.convert", _other("engines", "convert"), dict(coeffs=C9, engine="threejs"),
+    Row("engines.convert", _other("engines.presets", "convert"), dict(coeffs=C9, engine="threejs"),
         dict(coeffs=Coeffs(), engine=Choice(("threejs", "filament", "unity")))),
-    Row("engines.snippet", _other("engines", "snippet"), dict(coeffs=C9, engine="threejs"),
+    Row("engines.snippet", _other("engines.presets", "snippet"), dict(coeffs=C9, engine="threejs"),
         dict(coeffs=Coeffs(batch=False), engine=Choice(("threejs", "filament", "unity")))),
-    Row("engines.sun_direction", _other("engines", "sun_direction"), dict(sun_zenith=0.5, sun_azimuth=0.2, engine="unity"),
+    Row("engines.sun_direction", _other("engines.presets", "sun_direction"), dict(sun_zenith=0.5, sun_azimuth=0.2, engine="unity"),
         dict(sun_zenith=Number(0.0, math.pi), sun_azimuth=Number(), engine=Choice(("threejs", "filament", "unity")))),
-    # skysh.quantize
-    Row("quantize.words_per_channel", _other("quantize", "words_per_channel"), dict(bits=8), dict(bits=Count(2, 32))),
-    Row("quantize.bounds", _other("quantize", "bounds"), dict(bound="tight", irradiance=False),
+    # skysh.post.quantize
+    Row("quantize.words_per_channel", _other("post.quantize", "words_per_channel"), dict(bits=8), dict(bits=Count(2, 32))),
+    Row("quantize.bounds", _other("post.quantize", "bounds"), dict(bound="tight", irradiance=False),
         dict(bound=Choice(("tight", "prior")), irradiance=Flag())),
-    Row("quantize.ratios", _other("quantize", "ratios"), dict(coeffs=C9),
+    Row("quantize.ratios", _other("post.quantize", "ratios"), dict(coeffs=C9),
         dict(coeffs=Coeffs(), bound=Choice(("tight", "prior")), irradiance=Flag())),
-    Row("quantize.compress", _other("quantize", "compress"), dict(coeffs=C9),
+    Row("quantize.compress", _other("post.quantize", "compress"), dict(coeffs=C9),
         dict(coeffs=Coeffs(), bits=Count(2, 32), bound=Choice(("tight", "prior")), sqrt=Flag(), irradiance=Flag())),
-    Row("quantize.decompress", _other("quantize", "decompress"), {},
+    Row("quantize.decompress", _other("post.quantize", "decompress"), {},
         dict(dc=Number(), bits=Count(2, 32), bound=Choice(("tight", "prior")), sqrt=Flag(), irradiance=Flag(),
              words=Values((("negative", -np.ones((3, 2))), ("too-large", np.full((3, 2), 2**33)), ("text", "w"),
                            ("nan", np.full((3, 2), math.nan)), ("shape", np.zeros((3, 5), np.uint32)),
                            ("ragged", [[1, 2], [3], [4, 5]]), ("huge-int", [[10**400, 0]] * 3)))),
-        valid_factory=lambda: dict(zip(("dc", "words"), _module("quantize").compress(C9)))),
-    Row("quantize.table3_errors", _other("quantize", "table3_errors"), dict(coeffs=C9[None], bits=8, n_theta=4),
+        valid_factory=lambda: dict(zip(("dc", "words"), _module("post.quantize").compress(C9)))),
+    Row("quantize.table3_errors", _other("post.quantize", "table3_errors"), dict(coeffs=C9[None], bits=8, n_theta=4),
         dict(bits=Count(2, 32), n_theta=Count(3))),
-    # skysh.export_tables, skysh.export
-    Row("export_tables.export_tables", _other("export_tables", "export_tables"), dict(sky=None, bands=3),
+    # skysh.export.tables, skysh.export.c_like
+    Row("export_tables.export_tables", _other("export.tables", "export_tables"), dict(sky=None, bands=3),
         dict(sky=Values((("object", object()), ("none", None))), bands=Count(1, 7)),
         valid_factory=lambda: dict(sky=the_sky(), bands=3)),
-    Row("export.double_literal", _other("export", "double_literal"), dict(value=0.1),
+    Row("export.double_literal", _other("export.c_like", "double_literal"), dict(value=0.1),
         dict(value=Number(array=False))),
-    Row("export.float32_literal", _other("export", "float32_literal"), dict(value=0.1),
+    Row("export.float32_literal", _other("export.c_like", "float32_literal"), dict(value=0.1),
         dict(value=Values((("nan", math.nan), ("inf", math.inf), ("beyond-float32", 1e39), ("text", "0.1"),
                            ("none", None), ("bool", True))))),
-    Row("export.export_source", _other("export", "export_source"), dict(sky=None, language="c", bands=3),
+    Row("export.export_source", _other("export.c_like", "export_source"), dict(sky=None, language="c", bands=3),
         dict(language=Choice(("c", "glsl", "hlsl", "json", "js")), bands=Count(1, 7, none_ok=True),
              real=Choice(("double", "float"))),
         valid_factory=lambda: dict(sky=the_sky(), language="c", bands=3)),
-    # skysh.coefficient_file
-    Row("coefficient_file.zonal_half_layout", _other("coefficient_file", "zonal_half_layout"), dict(bands=3),
+    # skysh.table.coefficient_file
+    Row("coefficient_file.zonal_half_layout", _other("table.coefficient_file", "zonal_half_layout"), dict(bands=3),
         dict(bands=Count(1, 64))),
-    Row("coefficient_file.read", _other("coefficient_file", "read"), {},
+    Row("coefficient_file.read", _other("table.coefficient_file", "read"), {},
         dict(path=PathKind())),
-    Row("coefficient_file.write", _other("coefficient_file", "write"), dict(path=TMP_FILE, sky_table=None),
+    Row("coefficient_file.write", _other("table.coefficient_file", "write"), dict(path=TMP_FILE, sky_table=None),
         dict(sky_table=Values((("object", object()), ("none", None), ("text", "table"))),
              path=Values((("number", 3), ("none", None)))),
         valid_factory=lambda: dict(path=TMP_FILE, sky_table=the_sky().table)),
-    # skysh.fit (offline)
-    Row("fit.chebyshev_grid", _other("fit", "chebyshev_grid"), dict(grid=(8, 6)),
+    # skysh.table.fit (offline)
+    Row("fit.chebyshev_grid", _other("table.fit", "chebyshev_grid"), dict(grid=(8, 6)),
         dict(grid=Values(tuple(kind for kind in PAIR.cases if kind[0] != "above") + (("above", (1, 257)),)))),
-    Row("fit.held_out_points", _other("fit", "held_out_points"), dict(count=4, seed=0, corners=True),
+    Row("fit.held_out_points", _other("table.fit", "held_out_points"), dict(count=4, seed=0, corners=True),
         dict(count=Count(0), seed=Seed(), corners=Flag())),
-    Row("fit.edge_points", _other("fit", "edge_points"), dict(per_edge=2, seed=0), dict(per_edge=Count(0), seed=Seed())),
+    Row("fit.edge_points", _other("table.fit", "edge_points"), dict(per_edge=2, seed=0), dict(per_edge=Count(0), seed=Seed())),
 ]
 """Public functions of modules other helpers own: included so their gaps are counted (see KNOWN_FAILURES)."""
 

@@ -52,7 +52,7 @@ class TestInstalledWheel:
 
     def test_package_and_data_come_from_the_wheel(self, installed: Path, tmp_path: Path) -> None:
         code = (
-            "import skysh, skysh.coefficient_file as f; from skysh import SkySH; "
+            "import skysh, skysh.table.coefficient_file as f; from skysh import SkySH; "
             "s = SkySH.load(); print(skysh.__file__); print(f.default_path())"
         )
         result = subprocess.run(

@@ -23,7 +23,9 @@ from typing import Any
 import numpy as np
 import pytest
 
-from skysh import SkySH, cli, lights
+from skysh import SkySH
+from skysh.app import cli
+from skysh.lighting import lights
 from skysh.options import Options, check_albedo
 
 BY_INTENT: dict[str, tuple[bool, bool]] = {

@@ -8,7 +8,7 @@ interpreter start instead of seven), and each test asserts on its own step:
 
 -   ``import skysh`` + ``SkySH.load()`` + one coefficients call, first, while the
     interpreter is fresh (``sys.modules`` right after it): import neither
-    colour-science, matplotlib, the offline fit (``skysh.fit``) nor ``tools``;
+    colour-science, matplotlib, the offline fit (``skysh.table.fit``) nor ``tools``;
 -   ``python -m skysh coeffs ...`` (default sRGB, every text format, the sun from a
     place and time), each run as ``python -m`` runs it (``runpy``, ``__main__``):
     none of them imported by that step or any step before it (the union of the
@@ -37,7 +37,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import bench_startup
 
-FORBIDDEN: tuple[str, ...] = ("colour", "matplotlib", "skysh.fit", "tools", "tqdm")
+FORBIDDEN: tuple[str, ...] = ("colour", "matplotlib", "skysh.table.fit", "tools", "tqdm")
 """Top-level names (and prefixes) that the light paths must not import."""
 
 STEP_MARK: str = "test_startup step done: "
@@ -106,7 +106,7 @@ for step, argv in steps.items():  # as `python -m skysh ARGV` runs skysh/__main_
 sys.modules["matplotlib"] = None  # import matplotlib now raises ImportError
 warnings.simplefilter("ignore")  # colour-science warns that its plotting is unavailable
 try:
-    from skysh.cli import main
+    from skysh.app.cli import main
     with contextlib.redirect_stdout(io.StringIO()):
         codes["render"] = [main(["render", "--sun-zenith", "40", "--turbidity", "3", "--width", "16", "--out", png]), ""]
 except Exception as error:
@@ -150,13 +150,13 @@ def _light_step(probe: dict[str, Any], step: str) -> list[str]:
 @pytest.mark.parametrize("name", list(COEFFS_EXTRAS))
 def test_coeffs_command_does_not_import_colour(probe: dict[str, Any], name: str) -> None:
     imported = _light_step(probe, f"coeffs {name}")
-    assert "skysh.runtime" in imported and "skysh.cli" in imported
+    assert "skysh.runtime" in imported and "skysh.app.cli" in imported
     assert _forbidden(imported) == []
 
 
 def test_coeffs_from_place_and_time_does_not_import_colour(probe: dict[str, Any]) -> None:
     imported = _light_step(probe, "place and time")
-    assert "skysh.sun" in imported and _forbidden(imported) == []
+    assert "skysh.lighting.sun" in imported and _forbidden(imported) == []
 
 
 def test_render_works_without_matplotlib(probe: dict[str, Any]) -> None:

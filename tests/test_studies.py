@@ -1,4 +1,4 @@
-"""Tests of the sky-data studies in tools/studies/ (moved out of skysh.hazel and skysh.quantize).
+"""Tests of the sky-data studies in tools/studies/ (moved out of skysh.post.hazel and skysh.post.quantize).
 
 The sky's exact irradiance is checked against an independent adaptive quadrature of the true
 sky over the lune {z >= 0, n.w >= 0}; the comparison and Table 3 studies for their structure and
@@ -14,8 +14,9 @@ import numpy as np
 import pytest
 from conftest import random_unit_vectors, tools_on_path, unit
 
-from skysh import dering, hazel, preetham, quantize
 from skysh.domain import SKY
+from skysh.model import preetham
+from skysh.post import dering, hazel, quantize
 
 tools_on_path()
 from studies import hazel_study, quantize_study, sky  # noqa: E402  (tools/ is not a package on the path by default)
@@ -44,7 +45,7 @@ l >= 3, so the odd parts of both are the same L1 term and the difference is roun
 
 L1_RULE_TOLERANCE: float = 1e-3
 """Relative change of the Table 3 L1 sums from 32 to 64 Gauss nodes (|error| has kinks where it
-changes sign, so the rule is not exact; tests/test_quantize.py uses the same bound on delta lights)."""
+changes sign, so the rule is not exact; tests/post/test_quantize.py uses the same bound on delta lights)."""
 
 
 def lune_irradiance(normal: np.ndarray, sun_zenith: float, turbidity: float, sun_azimuth: float) -> np.ndarray:
@@ -113,7 +114,7 @@ class TestExactIrradiance:
         assert np.all(direct[np.argmin(normals[:, 2])] == 0.0)  # a normal straight down sees no sky
 
     def test_antipodal_identity_on_the_sky(self, normals, lune):
-        """skysh.hazel's identity n.R1 = (I(n) - I(-n)) / 4 with I the true sky's irradiance."""
+        """skysh.post.hazel's identity n.R1 = (I(n) - I(-n)) / 4 with I the true sky's irradiance."""
         _, direct = lune
         k = normals.shape[0]
         c = preetham.sky_sh(self.SUN_ZENITH, self.TURBIDITY, bands=2, sun_azimuth=self.SUN_AZIMUTH)

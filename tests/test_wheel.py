@@ -22,7 +22,7 @@ from pathlib import Path
 
 from conftest import ROOT
 
-from skysh import coefficient_file
+from skysh.table import coefficient_file
 
 
 def _names(wheel: Path) -> list[str]:

@@ -230,7 +230,7 @@ def measure(source: str, name: str, path: str = "") -> tuple[Size, ast.Module]:
     source
         The module's text.
     name
-        Its dotted name (``skysh.fit``).
+        Its dotted name (``skysh.table.fit``).
     path
         Its path relative to the repository root, for the table.
 
@@ -265,7 +265,7 @@ def _import_nodes(node: ast.AST, in_function: bool = False) -> Iterator[tuple[as
 
 
 def _known(dotted: str, modules: frozenset[str]) -> str | None:
-    """The longest prefix of ``dotted`` that is one of ``modules`` (``skysh.fit.solve`` -> ``skysh.fit``)."""
+    """The longest prefix of ``dotted`` that is one of ``modules`` (``skysh.table.fit.solve`` -> ``skysh.table.fit``)."""
     parts = dotted.split(".")
     for end in range(len(parts), 0, -1):
         if ".".join(parts[:end]) in modules:
@@ -298,7 +298,7 @@ def imports(tree: ast.AST, own: str, modules: frozenset[str], path: str = "", is
     own
         Its dotted name (relative imports are resolved against it).
     modules
-        The dotted names of every module of the package (``skysh``, ``skysh.fit``, ...).
+        The dotted names of every module of the package (``skysh``, ``skysh.table.fit``, ...).
     path
         Its path, recorded in each :class:`Import`.
     is_package

@@ -5,7 +5,7 @@ Deringing measurements (Sloan 2017, seed 000, and the exact minimum)
 Prints markdown tables, then one JSON line per row:
 
 1.  **Table 1 vs eq. (6)**: the least irradiance of a windowed delta (of its mean) for the
-    seed's Table 1, plain eq. (6) and :data:`skysh.dering.WINDOW_TABLE`.
+    seed's Table 1, plain eq. (6) and :data:`skysh.post.dering.WINDOW_TABLE`.
 2.  **The seed's bound against the exact minimum**: ``exact_min - min_bound`` for random
     3-band functions (unit: largest |coefficient|), skies and lights (unit: mean); a
     violation is a bound above the minimum.
@@ -13,10 +13,10 @@ Prints markdown tables, then one JSON line per row:
     found by 200 bisection steps (independent of Newton), and the shortfall of 1..5 steps
     against 64, on random and adversarial (hard-case, clustered eigenvalue) problems.
 4.  **The 4..7-band certificate**: its covering radius (scipy's convex hull), the slack
-    ``value at the direction - certified bound`` of :func:`skysh.dering.exact_min`, and the
+    ``value at the direction - certified bound`` of :func:`skysh.post.dering.exact_min`, and the
     curvature bound of the last table row, on lights and for any non-negative light
     (``sum_l l^2 (2l+1) |A_l| / A_0 s_l`` means: the basis of ``CERTIFIED_MARGIN``).
-5.  **Windowing excess**: rows chosen by :func:`skysh.dering.dering` against the least
+5.  **Windowing excess**: rows chosen by :func:`skysh.post.dering.dering` against the least
     continuous position along the table path (linear interpolation between rows, bisection
     to 2^-12 of a row on exact_min), and the relative L2 change of the irradiance.
 6.  **Timings**: one (K, 3) call and per item of a batch, 3 and 7 bands.
@@ -41,7 +41,10 @@ import numpy as np
 from numpy.typing import NDArray
 from studies.seed_bound import min_bound
 
-from skysh import SkySH, dering, sh, shmin
+from skysh import SkySH
+from skysh.post import dering
+from skysh.sh import basis as sh
+from skysh.sh import minimum as shmin
 
 QUICK: dict[str, int] = {"skies": 200, "lights": 120, "random": 2000}
 """Sample counts with --quick."""

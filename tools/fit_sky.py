@@ -4,12 +4,12 @@ Fit the Preetham sky's SH coefficients and write the coefficient file.
 
 Projects the sky over a (sun zenith, turbidity) grid (in parallel, with a
 progress bar), fits every coefficient with a 2D Chebyshev polynomial by
-weighted least squares (skysh.fit), fits the sun's direct illuminance
-(skysh.solar) as ln XYZ in the same run (skysh.fit.build_sun), and the
-sky's certified non-negative 3-band irradiance (skysh.irradiance_fit.build_table:
+weighted least squares (skysh.table.fit), fits the sun's direct illuminance
+(skysh.model.solar) as ln XYZ in the same run (skysh.table.fit.build_sun), and the
+sky's certified non-negative 3-band irradiance (skysh.table.irradiance_fit.build_table:
 a convex problem per grid point, the sky table's polynomial, the exact minimum
 at 12,004 held-out points; needs the tools extra, cvxpy), measures them on
-held-out points and writes a versioned file (skysh.coefficient_file, format
+held-out points and writes a versioned file (skysh.table.coefficient_file, format
 version 4). The logic lives in the package; this is the command line.
 
     python tools/fit_sky.py --quick --out /tmp/q.npz
@@ -29,7 +29,7 @@ when named with ``--out`` and ``--force`` together; any other file is written
 ``<prog>: error: ...`` on stderr with exit status 2.
 
 The irradiance table is a required table of the file format
-(``skysh.coefficient_file.TABLES``), so without cvxpy every run refuses before
+(``skysh.table.coefficient_file.TABLES``), so without cvxpy every run refuses before
 any projection (``--compare-scalings`` too: it also writes the file)::
 
     fit_sky.py: error: fitting the certified irradiance table needs cvxpy and clarabel (the tools extra), which
@@ -57,17 +57,19 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import skysh  # noqa: E402
-from skysh import coefficient_file, files, fit, irradiance_fit, sh, sun_table  # noqa: E402
-from skysh._version import __version__  # noqa: E402
+from skysh import files  # noqa: E402
+from skysh.sh import basis as sh  # noqa: E402
+from skysh.table import coefficient_file, fit, irradiance_fit, sun_table  # noqa: E402
+from skysh import __version__  # noqa: E402
 
 QUICK_GRID = (16, 8)
 QUICK_HELD_OUT = 24
 MAX_GRID_NODES: int = fit.MAX_GRID_NODES
-"""Largest --grid in either variable (skysh.fit's bound)."""
+"""Largest --grid in either variable (skysh.table.fit's bound)."""
 MAX_JOBS: int = 256
 """Largest --jobs."""
 SUN_GOAL: float = 1e-4
-"""Issue 15's goal for the sun table: worst held-out relative error (skysh.fit.SUN_ERROR_DEFINITION)."""
+"""Issue 15's goal for the sun table: worst held-out relative error (skysh.table.fit.SUN_ERROR_DEFINITION)."""
 QUICK_IRRADIANCE_HELD_OUT: tuple[int, int] = (8, 1)
 """--quick: exact solves for the irradiance table's fit error (random points, per edge; plus the corners)."""
 IRRADIANCE_TASK: str = "fitting the certified irradiance table"
@@ -222,7 +224,7 @@ def build_parser() -> OneLineParser:
 
 def with_irradiance(parser: argparse.ArgumentParser, args: argparse.Namespace, sky_table: coefficient_file.SkyTable,
                     grid: tuple[int, int], mapper: Any) -> coefficient_file.SkyTable:
-    """``sky_table`` with the irradiance table of :func:`skysh.irradiance_fit.build_table` and its block (exit 2 if
+    """``sky_table`` with the irradiance table of :func:`skysh.table.irradiance_fit.build_table` and its block (exit 2 if
     it is not certified non-negative)."""
     held_out = QUICK_IRRADIANCE_HELD_OUT if args.quick else irradiance_fit.FIT_ERROR_POINTS
     try:

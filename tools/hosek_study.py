@@ -4,7 +4,7 @@ Measurements for fitting the Hosek-Wilkie sky's SH (issue 17): which variables a
 
 Needs the optional extra (``pip install 'skysh[hosek]'``: the model's dataset comes
 with mitsuba). Each section prints a table; the numbers quoted in
-``skysh/hosek.py``, ``tests/test_hosek.py`` and ``docs/hosek.md`` come from here.
+``skysh/model/hosek.py``, ``tests/model/test_hosek.py`` and ``docs/hosek.md`` come from here.
 
     python tools/hosek_study.py --minima        # where the model's radiance goes negative
     python tools/hosek_study.py --albedo        # is the SH linear in the albedo? (two tables?)
@@ -14,9 +14,9 @@ with mitsuba). Each section prints a table; the numbers quoted in
     python tools/hosek_study.py --mitsuba       # float32 agreement with Mitsuba's sunsky (needs mitsuba)
 
 Error measure: E_mean of the Habel seed (eq. 3) over the m >= 0 coefficients of 7
-bands, worst channel, relative to L_min (skysh.fit.error_measures). L_min is the
-sky's minimum per channel (:func:`skysh.hosek.sky_minimum`) floored as
-skysh.fit.error_denominator does (5 % of the minimum luminance) and, because the
+bands, worst channel, relative to L_min (skysh.table.fit.error_measures). L_min is the
+sky's minimum per channel (:func:`skysh.model.hosek.sky_minimum`) floored as
+skysh.table.fit.error_denominator does (5 % of the minimum luminance) and, because the
 model's radiance reaches zero and below near the horizon for a low sun, also at
 :data:`MEAN_FLOOR` of the hemisphere's mean luminance (the count of points where
 that floor decides is printed).
@@ -45,8 +45,10 @@ sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
 
-from skysh import _mitsuba_data, fit, hosek, poly, sh  # noqa: E402
-from skysh.coefficient_file import zonal_half_layout  # noqa: E402
+from skysh.model import hosek, hosek_data  # noqa: E402
+from skysh.sh import basis as sh  # noqa: E402
+from skysh.table import fit, poly  # noqa: E402
+from skysh.table.coefficient_file import zonal_half_layout  # noqa: E402
 
 BANDS: int = 7
 GOAL: float = 1e-4
@@ -89,7 +91,7 @@ def truth(ts: np.ndarray, t: np.ndarray, a: np.ndarray, jobs: int) -> tuple[np.n
 
 
 def denominator(lmin: np.ndarray, coeffs: np.ndarray) -> np.ndarray:
-    """L_min per channel: skysh.fit's floor, then MEAN_FLOOR x the hemisphere's mean luminance."""
+    """L_min per channel: skysh.table.fit's floor, then MEAN_FLOOR x the hemisphere's mean luminance."""
     mean_y = (coeffs[:, 0] @ hosek.luminance_row("sRGB")) / math.sqrt(math.pi)  # DC = sqrt(pi) x mean
     return np.maximum(fit.error_denominator(lmin), MEAN_FLOOR * mean_y[:, None])
 
@@ -191,7 +193,7 @@ def interval_data(interval: int, nodes: tuple[int, int, int], held_out: int, var
 
 
 def fit_interval(data: dict, interval: int, degrees: tuple[int, int, int], variable: str) -> np.ndarray:
-    """Weighted least squares (residuals / L_min, as skysh.fit) on the grid; the held-out predictions (P, 28, 3)."""
+    """Weighted least squares (residuals / L_min, as skysh.table.fit) on the grid; the held-out predictions (P, 28, 3)."""
     ts, t, a, values, den = data["grid"]
     design = design3(*_variables(ts, t, a, interval, variable), degrees)
     hts, ht, ha = data["held_out"][:3]
@@ -264,7 +266,7 @@ def section_mitsuba() -> None:
         diff = np.abs(hosek.radiance(d, *sky) - t._mitsuba_eval(mi, sky, d) * scale)
         worst.append(float(np.max(diff / (t.EPS32 * t._float32_budget(d, *sky)))))
     print(f"|skysh - Mitsuba| / (EPS32 x budget) over {50 * 300} directions (300 skies): max {max(worst):.1f}, "
-          f"median of the per-sky maxima {np.median(worst):.2f} (tests/test_hosek.py allows {t.MITSUBA_ULPS:.0f})")
+          f"median of the per-sky maxima {np.median(worst):.2f} (tests/model/test_hosek.py allows {t.MITSUBA_ULPS:.0f})")
     compare = t.TestAgainstMitsuba()._compare  # in units of the test's tolerance (MITSUBA_ULPS budgets)
     print(f"the test's comparison: {compare(mi):.2f} of its tolerance; negative controls: albedo a -> 1 - a "
           f"{compare(mi, lambda ts, phi, tu, a: (ts, phi, tu, 1.0 - a)):.1e}, azimuth from +Y "
@@ -282,8 +284,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--jobs", type=int, default=1, help="worker processes for the projections")
     args = parser.parse_args(argv)
     try:
-        _mitsuba_data.dataset_path()
-    except _mitsuba_data.HosekDataError as error:
+        hosek_data.dataset_path()
+    except hosek_data.HosekDataError as error:
         parser.error(str(error))
     intervals = [int(k) for k in args.intervals.split(",")]
     candidates = [tuple(int(d) for d in triple.split(",")) for triple in args.degrees.split(";")]

@@ -2,14 +2,14 @@
 """
 Issue 18: the best non-negative 3-band irradiance of the sky, measured.
 
-Prints, from the package's own code (:mod:`skysh.irradiance_fit`):
+Prints, from the package's own code (:mod:`skysh.table.irradiance_fit`):
 
 1.  the convergence of the true irradiance in the projection's bands and nodes;
 2.  over 42 skies (sun zenith 0-90 degrees, 1-degree steps near the horizon; turbidity
     2.5, 4, 6) against the true irradiance (64 bands) on 12,168 normals: the worst
     error (over normals and RGB, relative to each channel's mean irradiance; worst
     sky / median sky), the lowest value (exact minimum over the sphere,
-    :func:`skysh.dering.exact_min`), and the chromaticity error (CIE 1976 u'v'
+    :func:`skysh.post.dering.exact_min`), and the chromaticity error (CIE 1976 u'v'
     distance per normal) of every method;
 3.  how well each constrained optimum tabulates: fitted over the 48 x 24 Chebyshev
     grid with the sky table's polynomial (13, 7), its held-out fit error (exact
@@ -51,9 +51,11 @@ if str(ROOT) not in sys.path:
 import numpy as np  # noqa: E402
 from numpy.typing import NDArray  # noqa: E402
 
-from skysh import fit, sh, shmin  # noqa: E402
-from skysh import irradiance_fit as irf  # noqa: E402
-from skysh.dering import LINEAR_ATTENUATION, SEED_WINDOW_SIZES, exact_min, sinc4_window  # noqa: E402
+from skysh.post.dering import LINEAR_ATTENUATION, SEED_WINDOW_SIZES, exact_min, sinc4_window  # noqa: E402
+from skysh.sh import basis as sh  # noqa: E402
+from skysh.sh import minimum as shmin  # noqa: E402
+from skysh.table import fit  # noqa: E402
+from skysh.table import irradiance_fit as irf  # noqa: E402
 
 Log = Callable[[str], None]
 Mapper = Callable[[Callable, Iterable], Iterable]
@@ -278,10 +280,10 @@ def runtime_tabulated(sky: Any, sun_zenith: NDArray, turbidity: NDArray) -> NDAr
 
 
 def continuous_window(size: NDArray) -> NDArray:
-    """(S, 3) factors of eq. (6) at window sizes (S,) with the linear ramp of :func:`skysh.dering.window_table`.
+    """(S, 3) factors of eq. (6) at window sizes (S,) with the linear ramp of :func:`skysh.post.dering.window_table`.
 
     Band 1 is scaled by ``1 - (1 - a) (1 - s2(w)) / (1 - s2(5.6))`` with ``a`` =
-    :data:`skysh.dering.LINEAR_ATTENUATION`: the table's rows for w in its sizes, any w in between.
+    :data:`skysh.post.dering.LINEAR_ATTENUATION`: the table's rows for w in its sizes, any w in between.
     """
     x = np.arange(3) / np.asarray(size, dtype=np.float64)[:, None]
     rows = np.where(x < 1.0, np.sinc(x) ** 4, 0.0)
@@ -405,7 +407,7 @@ def table_rows(ev: Evaluator, methods: dict[str, NDArray]) -> dict[str, dict[str
 # Tabulation
 # --------------------------------------------------------------------------- #
 def grid_axes(grid: tuple[int, int]) -> tuple[NDArray, NDArray]:
-    """The 1-D axes of the sky table's Chebyshev grid (:func:`skysh.fit.chebyshev_grid`)."""
+    """The 1-D axes of the sky table's Chebyshev grid (:func:`skysh.table.fit.chebyshev_grid`)."""
     ts, tu = fit.chebyshev_grid(grid)
     return ts.reshape(grid)[:, 0], tu.reshape(grid)[0]
 
@@ -482,7 +484,7 @@ CROSS_CHECK_DIRECTIONS: int = 4096
 
 def cross_check_minimum(coeffs: NDArray, minimum: NDArray) -> tuple[float, float]:
     """(lowest, largest) of (sampled minimum - exact minimum) / mean over the points, the sampled minimum over
-    :data:`CROSS_CHECK_DIRECTIONS` directions: never negative if ``minimum`` (:func:`skysh.shmin.exact_min`) is
+    :data:`CROSS_CHECK_DIRECTIONS` directions: never negative if ``minimum`` (:func:`skysh.sh.minimum.exact_min`) is
     a true lower bound, and small (the sample's covering radius, squared) if it is tight."""
     dense = np.einsum("dk,nkc->ndc", sh.basis(shmin.fibonacci(CROSS_CHECK_DIRECTIONS), 3), coeffs)
     sampled = np.min(np.min(dense, axis=1) / (irf.Y00 * coeffs[:, 0]), axis=1)
@@ -523,7 +525,7 @@ def section_tabulation(ev: Evaluator, tabulated: dict[irf.Objective, dict[str, A
           f"errors of the tabulated result on the {len(ev.skies)} skies as in section 2.\n")
     agreement = [r["agreement"] for r in tabulated.values()]
     if agreement:
-        print(f"The tabulated minima (`skysh.shmin.exact_min`) lie below a {CROSS_CHECK_DIRECTIONS}-direction sampled "
+        print(f"The tabulated minima (`skysh.sh.minimum.exact_min`) lie below a {CROSS_CHECK_DIRECTIONS}-direction sampled "
               f"minimum by {min(a[0] for a in agreement):.1e} to {max(a[1] for a in agreement):.1e} of the mean "
               "(never above it: a true lower bound).\n")
     print("| objective | grid solve: wall / CPU (1 process) | fit error worst / median | tabulated minimum (at) "
@@ -657,7 +659,7 @@ def main(argv: list[str] | None = None) -> int:
           f"{', '.join(map(str, SKY_TURBIDITIES))}), 12,168 normals, truth 64 bands\n")
     print(f"u'v': distance to the truth's chromaticity per normal where the true luminance irradiance is >= "
           f"{CHROMA_FLOOR:g} x its mean; worst normal and median normal per sky. Lowest value: exact minimum over the "
-          f"sphere (`skysh.dering.exact_min`) / the true mean (below -{NEGATIVE_TOL:g} counts as negative).\n")
+          f"sphere (`skysh.post.dering.exact_min`) / the true mean (below -{NEGATIVE_TOL:g} counts as negative).\n")
     results = table_rows(ev, methods)
     print()
     if tabulated:

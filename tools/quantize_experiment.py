@@ -25,7 +25,7 @@ Run::
     python tools/quantize_experiment.py            # 1024 + 64 points
 
 Sky data for (1) come from the source named by ``--source`` (default: the shipped
-runtime ``skysh.SkySH``; ``reference``: ``skysh.preetham.sky_sh``); (2) always uses
+runtime ``skysh.SkySH``; ``reference``: ``skysh.model.preetham.sky_sh``); (2) always uses
 the reference projection at 32 bands.
 """
 
@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 from studies import hazel_study, quantize_study, sky
 
-from skysh import hazel, quantize
+from skysh.post import hazel, quantize
 
 RULE_CHECK_POINTS: int = 64
 """Sky points of the L1 quadrature check (the doubled rule costs four times the Table 3 rule)."""

@@ -1,10 +1,10 @@
 #!/usr/bin/env python
 """
-The sun and the ground: figures behind skysh.solar and skysh.ground (issue 15)
+The sun and the ground: figures behind skysh.model.solar and skysh.model.ground (issue 15)
 ==============================================================================
 
 Prints (plain text, no files) every figure quoted in the docstrings of
-:mod:`skysh.solar` and :mod:`skysh.ground` and in the issue-15 report:
+:mod:`skysh.model.solar` and :mod:`skysh.model.ground` and in the issue-15 report:
 
 ``--table``
     The sun's direct normal illuminance, luminance and sRGB chromaticity over
@@ -15,14 +15,14 @@ Prints (plain text, no files) every figure quoted in the docstrings of
     The sun's per-band windows: exact minimum of a delta's irradiance and its
     relative L2 error for the derived non-negative windows, the seed's
     (1, 0.92, 0.73), no window, and the deringing table's last row.
-    ``--derive`` re-derives :data:`skysh.solar.SUN_WINDOW_PARAMETERS` (about 30 s).
+    ``--derive`` re-derives :data:`skysh.model.solar.SUN_WINDOW_PARAMETERS` (about 30 s).
 ``--ground``
     The Gibbs-filter question for the ground: its N-band irradiance error with
     and without the zonal sinc filter (Habel eq. 5) against the exact
     irradiance, and the radiance ringing with and without.
 ``--fit``
     How smooth the sun's illuminance is over (sun zenith, turbidity): held-out
-    errors of Chebyshev fits of ln XYZ (skysh.fit's fit_table / evaluate_table)
+    errors of Chebyshev fits of ln XYZ (skysh.table.fit's fit_table / evaluate_table)
     in three zenith variables and two turbidity variables, by degrees.
 ``--cover``
     Whether the sky's irradiance covers the negative ring of the seed's
@@ -48,7 +48,9 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402 (after the thread settings)
 
-from skysh import fit, ground, preetham, sh, solar  # noqa: E402 (imports numpy)
+from skysh.model import ground, preetham, solar  # noqa: E402
+from skysh.sh import basis as sh  # noqa: E402
+from skysh.table import fit  # noqa: E402
 
 DEG = math.pi / 180.0
 TURBIDITIES = (2.5, 3.0, 4.0, 6.0)
@@ -60,7 +62,7 @@ FIT_GOAL = 1e-4  # issue 15: held-out error <= 1e-4 relative
 # --table
 # --------------------------------------------------------------------------- #
 def section_table() -> None:
-    print("== The sun through the atmosphere (skysh.solar) ==")
+    print("== The sun through the atmosphere (skysh.model.solar) ==")
     ts = np.array(ZENITHS_DEG) * DEG
     print(f"solid angle {solar.SUN_SOLID_ANGLE:.6e} sr, angular radius {solar.SUN_ANGULAR_RADIUS:.4e} rad "
           f"= {math.degrees(solar.SUN_ANGULAR_RADIUS):.5f} deg")
@@ -112,9 +114,9 @@ def _min_ratio(window: np.ndarray) -> float:
 
 
 def section_windows(derive: bool) -> None:
-    print("== The sun as a windowed delta (skysh.solar.sun_window) ==")
+    print("== The sun as a windowed delta (skysh.model.solar.sun_window) ==")
     print("min = exact minimum of the delta's irradiance / its mean; err = relative L2 error over normals")
-    from skysh import dering
+    from skysh.post import dering
 
     for n in range(1, solar.MAX_WINDOW_BANDS + 1):
         w, a = solar.SUN_WINDOW_PARAMETERS[n - 1]
@@ -210,9 +212,9 @@ def _fit_errors(variable: str, log_t: bool, degrees: tuple[int, int], data: dict
 
 
 def section_fit() -> None:
-    print("== Smoothness of the sun's illuminance: Chebyshev fits of ln XYZ (skysh.fit.fit_table) ==")
+    print("== Smoothness of the sun's illuminance: Chebyshev fits of ln XYZ (skysh.table.fit.fit_table) ==")
     print("fit grid: 48 x 16 Chebyshev nodes in (zenith variable, turbidity variable); held out: 512 uniform "
-          "random points + 4 corners + 4 x 64 edge points (skysh.fit.held_out_points / edge_points)")
+          "random points + 4 corners + 4 x 64 edge points (skysh.table.fit.held_out_points / edge_points)")
     print("errors, worst over held-out points: xyz = max_c |dXYZ_c| / XYZ_c (strict, per channel); "
           "rgb = max_c |dRGB_c| / max(|RGB_c|, Y) (sRGB, floored at the point's own luminance, so out-of-gamut "
           "channels near 0 are measured against Y); zen = max_c |dRGB_c| / DNI(zenith, same T)")
@@ -254,7 +256,7 @@ def section_cover() -> None:
     print("min over normals of the irradiance of sky (true 3-band SH, deringed) + sun, / DNI; "
           "'seed' = (1, 0.92, 0.73), 'nonneg' = SUN_WINDOWS[2]")
     try:
-        from skysh import dering as dering_module
+        from skysh.post import dering as dering_module
     except ImportError:  # pragma: no cover - dering is part of the package
         dering_module = None
     normals = sh.quadrature_rule(64)[0]

@@ -1,5 +1,5 @@
 // Runs three.js and Babylon.js (the versions pinned in package.json) on SH coefficient sets and
-// prints what each engine computes, for tests/test_engines.py. One process for all cases:
+// prints what each engine computes, for tests/engines/test_engines.py. One process for all cases:
 // JSON in on stdin, JSON out on stdout. Numbers travel as JSON, which both Python and
 // JavaScript write as the shortest text that reads back as the same double.
 //

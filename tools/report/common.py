@@ -25,9 +25,12 @@ from numpy.typing import NDArray
 from tqdm import tqdm
 
 from report.plans import Plan
-from skysh import coefficient_file, fit, preetham, runtime, sh
+from skysh import runtime
 from skysh.domain import SKY
+from skysh.model import preetham
 from skysh.runtime import SkySH
+from skysh.sh import basis as sh
+from skysh.table import coefficient_file, fit
 
 matplotlib.use("Agg")  # PNGs only, no display (no figure exists yet, so the switch is free)
 
@@ -52,13 +55,13 @@ MAX_BANDS: int = 7
 """Bands of the shipped file and of every study here."""
 
 RANDOM_METHODS: tuple[str, ...] = ("mc", "stratified", "qmc")
-"""The random projection methods of :func:`skysh.sh.project` (via :func:`skysh.preetham.sky_sh`)."""
+"""The random projection methods of :func:`skysh.sh.basis.project` (via :func:`skysh.model.preetham.sky_sh`)."""
 
 SUN_QUADRATURE: str = "quadrature (sun-adapted)"
-"""Label of :func:`skysh.preetham.sky_sh`'s default rule."""
+"""Label of :func:`skysh.model.preetham.sky_sh`'s default rule."""
 
 PLAIN_QUADRATURE: str = "quadrature (plain product)"
-"""Label of :func:`skysh.sh.project`'s product Gauss rule over the hemisphere."""
+"""Label of :func:`skysh.sh.basis.project`'s product Gauss rule over the hemisphere."""
 
 ALL_METHODS: tuple[str, ...] = (*RANDOM_METHODS, SUN_QUADRATURE, PLAIN_QUADRATURE)
 """Every projection method of section 1, in the order of its charts and tables."""
@@ -76,7 +79,7 @@ DPI: int = 100
 """Resolution of the PNGs (keeps the committed report small)."""
 
 Y00: float = sh.Y00
-"""The constant SH basis function (:data:`skysh.sh.Y00`): the mean over the sphere of SH c is ``c_0 * Y00``."""
+"""The constant SH basis function (:data:`skysh.sh.basis.Y00`): the mean over the sphere of SH c is ``c_0 * Y00``."""
 
 HALF_ROWS: NDArray[np.intp] = np.array(
     [sh.index(degree, m) for degree, m in coefficient_file.zonal_half_layout(MAX_BANDS)], dtype=np.intp
@@ -233,7 +236,7 @@ def full_from_half(half: NDArray, bands: int) -> NDArray:
 
 
 def error_all(predicted: NDArray, truth: NDArray, denominator: NDArray, bands: int) -> dict[str, NDArray]:
-    """:func:`skysh.fit.error_measures` over **all** ``bands^2`` coefficients of full-layout arrays (P, K, 3).
+    """:func:`skysh.table.fit.error_measures` over **all** ``bands^2`` coefficients of full-layout arrays (P, K, 3).
 
     ``fit.error_measures`` sums the first ``b (b + 1) / 2`` rows of its input (the
     m >= 0 layout of a fit, whose m < 0 rows are zero). A projection by random
@@ -261,7 +264,7 @@ def mean_value(coeffs: NDArray) -> NDArray:
 
 
 def luminance_row() -> NDArray:
-    """Y from linear sRGB: the second row of the inverse of the XYZ -> sRGB matrix of skysh.preetham."""
+    """Y from linear sRGB: the second row of the inverse of the XYZ -> sRGB matrix of skysh.model.preetham."""
     return np.linalg.inv(preetham.rgb_from_xyz_matrix("sRGB"))[1]
 
 

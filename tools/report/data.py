@@ -3,7 +3,7 @@ Data several sections share, computed once per run
 ==================================================
 
 -   :func:`project`: the sky's truth (m >= 0 rows) and minima at many points, through
-    :func:`skysh.fit.project_points`, optionally in worker processes.
+    :func:`skysh.table.fit.project_points`, optionally in worker processes.
 -   :func:`grids`: the held-out test grid and the Chebyshev fitting grid (sections 2,
     3, 8, 9).
 -   :func:`sweep`: tables fitted at every swept (d_theta, d_tau), their held-out errors
@@ -25,8 +25,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from report.common import MAX_BANDS, SEED_DEGREES, Context, interleaved_best, uniform_grid
-from skysh import coefficient_file, fit, poly
 from skysh.runtime import SkySH
+from skysh.table import coefficient_file, fit, poly
 
 SWEEP_SUN: tuple[float, float, float] = (0.7, 3.3, 0.4)
 """(sun zenith rad, turbidity, sun azimuth rad) of every timed runtime call (scalar fast path)."""
@@ -35,7 +35,7 @@ SWEEP_SUN: tuple[float, float, float] = (0.7, 3.3, 0.4)
 def project(ctx: Context, sun_zenith: NDArray, turbidity: NDArray, desc: str, processes: int = 1) -> tuple[NDArray, NDArray]:
     """Truth (P, 28, 3) m >= 0 coefficients and sky minima (P, 4) at the points, 7 bands, sun-adapted quadrature.
 
-    :func:`skysh.fit.project_points` with the shipped fit's settings (``plan.grid_nodes``
+    :func:`skysh.table.fit.project_points` with the shipped fit's settings (``plan.grid_nodes``
     nodes per panel; None: ``sky_sh``'s default, the shipped fit's); with ``processes``
     > 1 the points are spread over a process pool, in order.
     """

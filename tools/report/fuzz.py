@@ -5,7 +5,7 @@ Section 8 (e): fuzzing ``SkySH.coefficients``
 Random and adversarial calls in nine categories, then the count of every bad-input
 kind the test suite feeds every public function and CLI command
 (``tests/test_input_hygiene.py``) and every corrupted coefficient file
-(``tests/test_corrupt_file.py``), run here and tallied from pytest's JUnit XML. The expected outcome is a finite
+(``tests/table/test_corrupt_file.py``), run here and tallied from pytest's JUnit XML. The expected outcome is a finite
 result for a valid call and a ValueError otherwise; a TypeError is recorded (and
 counted as unexpected). Any other exception is not caught: it stops the report with
 its traceback, since it is a bug of the runtime that no table should hide.
@@ -232,7 +232,7 @@ def compute(ctx: Context) -> dict[str, Any]:
 
 SUITES: dict[str, str] = {
     "bad values, every public function and CLI command": "tests/test_input_hygiene.py",
-    "corrupted coefficient files": "tests/test_corrupt_file.py",
+    "corrupted coefficient files": "tests/table/test_corrupt_file.py",
 }
 """The test files whose cases the report counts (one row each)."""
 

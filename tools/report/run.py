@@ -46,9 +46,9 @@ from report import (
 )
 from report.common import Context, Section, markdown_table, sig
 from report.plans import FULL, QUICK
-from skysh import irradiance_fit
-from skysh.argtypes import integer
+from skysh.app.argtypes import integer
 from skysh.runtime import SkySH
+from skysh.table import irradiance_fit
 
 SECTIONS: dict[int, ModuleType] = {
     m.NUMBER: m

@@ -37,7 +37,9 @@ from report.common import (
     style_axes,
     timed,
 )
-from skysh import fit, preetham, sh
+from skysh.model import preetham
+from skysh.sh import basis as sh
+from skysh.table import fit
 
 NUMBER: int = 1
 TITLE: str = "Projection methods"
@@ -194,9 +196,9 @@ def render(ctx: Context, study: dict[str, Any]) -> Section:
     s, plan = Section(NUMBER, TITLE), ctx.plan
     s.text(
         f"The sky at {len(plan.s1_points)} (sun zenith, turbidity) points, projected to {MAX_BANDS} bands by each "
-        "method of `skysh.preetham.sky_sh` (`mc`, `stratified`, `qmc`: uniform directions over the upper "
-        "hemisphere through `skysh.sh.project`; the default sun-adapted Gauss rule of `sky_quadrature_rule`) and "
-        "by `skysh.sh.project(..., 'quadrature', hemisphere=True)` (a plain product Gauss rule, not adapted to the "
+        "method of `skysh.model.preetham.sky_sh` (`mc`, `stratified`, `qmc`: uniform directions over the upper "
+        "hemisphere through `skysh.sh.basis.project`; the default sun-adapted Gauss rule of `sky_quadrature_rule`) and "
+        "by `skysh.sh.basis.project(..., 'quadrature', hemisphere=True)` (a plain product Gauss rule, not adapted to the "
         f"sun). Truth: `sky_sh(n=4 * {plan.truth_nodes}^2)`, the sun-adapted rule with {plan.truth_nodes} nodes "
         "per panel. Error: E_mean of Habel eq. 3 over all 49 coefficients (the random methods also err in the "
         "m < 0 ones), worst channel, with L_min = `fit.error_denominator(sky_minimum)`. Random methods: "

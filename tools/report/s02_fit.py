@@ -30,7 +30,8 @@ from report.common import (
     sig,
     style_axes,
 )
-from skysh import fit, preetham
+from skysh.model import preetham
+from skysh.table import fit
 
 NUMBER: int = 2
 TITLE: str = "The fit"

@@ -18,8 +18,9 @@ from matplotlib.colors import SymLogNorm
 from numpy.typing import NDArray
 
 from report.common import GAUSS_SPHERE_NODES, MAX_BANDS, Context, Section, luminance_row, mean_upper_luminance, pct, style_axes
-from skysh import preetham, sh
-from skysh.render import latlong_dirs, render_image
+from skysh.app.render import latlong_dirs, render_image
+from skysh.model import preetham
+from skysh.sh import basis as sh
 
 NUMBER: int = 4
 TITLE: str = "Gibbs filter"
@@ -114,7 +115,7 @@ def _pictures_figure(ctx: Context, d: dict[str, Any]) -> str:
         ax.imshow(images[gibbs], interpolation="nearest")
         ax.set_axis_off()
         ax.set_title(f"7 bands, {'Gibbs filter' if gibbs else 'no filter'}: sky, reconstruction, irradiance "
-                     "(skysh.render, tone-mapped)")
+                     "(skysh.app.render, tone-mapped)")
     for col, gibbs in enumerate((False, True)):
         ax = fig.add_subplot(grid[2, col])
         im = ax.imshow(d["signed"][gibbs], cmap="RdBu_r", norm=SymLogNorm(linthresh=0.02, vmin=-3, vmax=3),

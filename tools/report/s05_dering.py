@@ -2,8 +2,8 @@
 Section 5: deringing
 ====================
 
-:func:`skysh.dering.dering` (Sloan 2017) over the domain: the windows chosen, the
-target's minimum before and after (:func:`skysh.dering.exact_min`), the slack of
+:func:`skysh.post.dering.dering` (Sloan 2017) over the domain: the windows chosen, the
+target's minimum before and after (:func:`skysh.post.dering.exact_min`), the slack of
 the seed's bound :func:`studies.seed_bound.min_bound` against the exact minimum, and the
 detail each window removes against the time of a call.
 """
@@ -22,7 +22,8 @@ from numpy.typing import NDArray
 
 from report.common import MAX_BANDS, Context, Section, best_time, heatmap, mean_value, pct, sig, style_axes, uniform_grid, us
 from report.studies import min_bound
-from skysh import dering, sh
+from skysh.post import dering
+from skysh.sh import basis as sh
 
 NUMBER: int = 5
 TITLE: str = "Deringing"
@@ -198,7 +199,7 @@ def render(ctx: Context, d: dict[str, Any]) -> Section:
     shape = ctx.plan.dering_grid
     s.text(f"3-band sky radiance SH from `SkySH.coefficients` on a {shape[0]} x {shape[1]} grid of the domain "
            "(azimuth 0; the windows do not depend on it), with and without the Gibbs filter, and "
-           f"{d['windows'][3]['n']} of those skies at 7 bands, windowed by `skysh.dering.dering` (the least row of "
+           f"{d['windows'][3]['n']} of those skies at 7 bands, windowed by `skysh.post.dering.dering` (the least row of "
            "`window_table` whose target is non-negative; `exact_min` decides for 3 bands, its certified bound "
            "for 4..7).")
     _render_windows(ctx, s, d)

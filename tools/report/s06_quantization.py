@@ -15,7 +15,7 @@ import numpy as np
 
 from report import studies
 from report.common import Context, Section, sig, style_axes
-from skysh import quantize
+from skysh.post import quantize
 
 NUMBER: int = 6
 TITLE: str = "Quantization"
@@ -24,7 +24,7 @@ POINTS_SEED: int = 0
 
 
 def compute(ctx: Context) -> dict[str, Any]:
-    """Table 3 at 8 bits, and :func:`skysh.quantize.table3_errors` at every bit depth of the plan."""
+    """Table 3 at 8 bits, and :func:`skysh.post.quantize.table3_errors` at every bit depth of the plan."""
     plan = ctx.plan
     result = studies.table3_experiment(plan.table3_points, seed=POINTS_SEED, source=studies.SKY_SOURCE)
     ts, az, tu = studies.sample_sky_parameters(plan.table3_points, POINTS_SEED)

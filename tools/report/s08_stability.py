@@ -33,8 +33,11 @@ from report.common import (
     sig,
     style_axes,
 )
-from skysh import dering, fit, poly, preetham, sh
 from skysh.domain import SKY
+from skysh.model import preetham
+from skysh.post import dering
+from skysh.sh import basis as sh
+from skysh.table import fit, poly
 
 NUMBER: int = 8
 TITLE: str = "Stability where methods fail"
@@ -58,7 +61,7 @@ EDGE_AZIMUTH: float = 2.0
 # (a) conditioning
 # --------------------------------------------------------------------------- #
 def monomial_design(sun_zenith: NDArray, turbidity: NDArray, degrees: tuple[int, int]) -> NDArray:
-    """The seed's raw monomials theta^i tau^j (eq. 1), term (i, j) at i (d_tau + 1) + j like skysh.poly."""
+    """The seed's raw monomials theta^i tau^j (eq. 1), term (i, j) at i (d_tau + 1) + j like skysh.table.poly."""
     return np.polynomial.polynomial.polyvander2d(sun_zenith, turbidity, degrees)
 
 
@@ -70,7 +73,7 @@ def _channel_lstsq(design: NDArray, values: NDArray, weight: NDArray) -> tuple[N
 def weighted_lstsq(design: NDArray, values: NDArray, denominator: NDArray) -> tuple[NDArray, float]:
     """Least squares of ``design`` (P, T) against ``values`` (P, R, 3) with rows divided by ``denominator`` (P, 3).
 
-    The weighting of :func:`skysh.fit.fit_table` (residuals relative to L_min),
+    The weighting of :func:`skysh.table.fit.fit_table` (residuals relative to L_min),
     per channel by ``numpy.linalg.lstsq`` (SVD, default rcond); returns the
     (T, R, 3) solution and the largest condition number of a weighted design.
     """
@@ -91,7 +94,7 @@ def normal_equations(design: NDArray, values: NDArray, denominator: NDArray) -> 
 
 
 def evaluate_float32(table: NDArray, degrees: NDArray, sun_zenith: NDArray, turbidity: NDArray) -> NDArray:
-    """:func:`skysh.fit.evaluate_table` (shipped form) with the table, the design terms, the scale and the sum in float32."""
+    """:func:`skysh.table.fit.evaluate_table` (shipped form), table, terms, scale and sum in float32."""
     within = (int(degrees[:, 0].max()), int(degrees[:, 1].max()))
     design = poly.design(sun_zenith, turbidity, within, True).astype(np.float32)
     scale = preetham.luminance_scale(sun_zenith, turbidity).astype(np.float32)
@@ -267,7 +270,7 @@ def _conditioning_figure(ctx: Context, rows: list[dict[str, Any]]) -> str:
 def _render_conditioning(ctx: Context, s: Section, rows: list[dict[str, Any]]) -> None:
     s.text("**Raw monomials against the well-conditioned basis.** The seed's eq. 1 (theta^i tau^j, radians and "
            "turbidity) fitted by the weighted least squares of `fit.fit_table` (rows divided by L_min, per channel "
-           "by `numpy.linalg.lstsq`, SVD-based; written in the report because `skysh.fit` has no public solver for "
+           "by `numpy.linalg.lstsq`, SVD-based; written in the report because `skysh.table.fit` has no public solver for "
            "an arbitrary design) on the same grid and weights as the Chebyshev forms; condition numbers of the "
            "design matrix alone and weighted by 1/L_min (the matrix actually solved); worst held-out E_mean at 7 "
            "bands in float64 and with the table, the design terms and the sum in float32 (an engine's float "

@@ -18,7 +18,10 @@ from numpy.typing import NDArray
 
 from report import data, studies
 from report.common import MAX_BANDS, Context, Section, full_from_half, pareto, pct, sig, style_axes
-from skysh import fit, hazel, preetham, sh
+from skysh.model import preetham
+from skysh.post import hazel
+from skysh.sh import basis as sh
+from skysh.table import fit
 
 NUMBER: int = 9
 TITLE: str = "What a scene needs"

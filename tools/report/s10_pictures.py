@@ -3,7 +3,7 @@ Section 10: pictures
 ====================
 
 The sky, its 3- and 7-band reconstructions and the irradiance, by
-:func:`skysh.render.render_image`, for a few suns.
+:func:`skysh.app.render.render_image`, for a few suns.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from report.common import DPI, MAX_BANDS, Context, Section
-from skysh.render import render_image
+from skysh.app.render import render_image
 
 NUMBER: int = 10
 TITLE: str = "Pictures"
@@ -37,7 +37,7 @@ def compute(ctx: Context) -> dict[str, Any]:
 
 def render(ctx: Context, d: dict[str, Any]) -> Section:
     s = Section(NUMBER, TITLE)
-    s.text("Latitude-longitude renders by `skysh.render.render_image` (one exposure per image: Reinhard with key "
+    s.text("Latitude-longitude renders by `skysh.app.render.render_image` (one exposure per image: Reinhard with key "
            "0.18 on the true sky's log-average; azimuth -180 to 180 deg left to right, zenith at the top, horizon "
            "in the middle; the sun is ringed): the Preetham sky, its SH reconstruction and the SH irradiance E / pi, "
            "at 3 bands (top row) and 7 bands (bottom row), Gibbs filter on (the runtime's default for radiance).")

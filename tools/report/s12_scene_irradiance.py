@@ -4,15 +4,15 @@ Section 12: sky + sun + ground irradiance against brute force, by bands (issue 1
 
 The runtime's ``SkySH.coefficients(..., sun=True, ground_albedo=rho, irradiance=True)``
 (its defaults for irradiance: no Gibbs filter; the sky deringed, or at 3 bands its
-certified irradiance table when the file has one) reconstructed with :func:`skysh.sh.basis`,
+certified irradiance table when the file has one) reconstructed with :func:`skysh.sh.basis.basis`,
 against a brute-force integration of the full scene radiance:
 
--   the Preetham sky (:func:`skysh.preetham.radiance`) above the horizon, integrated per
+-   the Preetham sky (:func:`skysh.model.preetham.radiance`) above the horizon, integrated per
     normal n over its *lune* {z > 0, n.w > 0} with a product Gauss rule in coordinates
     about the axis a = z x n that both bounding great circles contain (so the horizon
     and the clamped cosine's terminator are panel edges, not kinks inside a panel),
     split at the sun (the sky's conical kink sits on a panel corner);
--   the sun (:func:`skysh.solar.illuminance_rgb`, the spectral model, not the runtime's
+-   the sun (:func:`skysh.model.solar.illuminance_rgb`, the spectral model, not the runtime's
     fitted table) as a delta of its illuminance: ``E_sun max(0, n.s)``;
 -   a Lambertian ground of albedo rho below the horizon, radiance ``rho E_h / pi`` with
     E_h the brute-force horizontal irradiance of sky and sun, integrated over the lower
@@ -41,7 +41,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from report.common import Context, Section, pct, sig, style_axes
-from skysh import preetham, sh, solar
+from skysh.model import preetham, solar
+from skysh.sh import basis as sh
 
 NUMBER: int = 12
 TITLE: str = "Scene irradiance against brute force"
@@ -261,12 +262,12 @@ def render(ctx: Context, d: dict[str, Any]) -> Section:
     s.text(
         "`SkySH.coefficients(sun_zenith, turbidity, 0.6, bands=N, irradiance=True, sun=True, ground_albedo=rho)` "
         "(runtime defaults: no Gibbs filter; the sky deringed, or at N = 3 its irradiance table"
-        + (")" if d["table_at_3"] else ", which this file lacks)") + " reconstructed with `skysh.sh.basis` on "
+        + (")" if d["table_at_3"] else ", which this file lacks)") + " reconstructed with `skysh.sh.basis.basis` on "
         f"{d['normals']:,} Gauss normals, against a brute-force integral of the full scene radiance per normal: the "
         "Preetham sky over the normal's lune {z > 0, n.w > 0} (a product Gauss rule about the axis z x n, so the "
         "horizon and the clamped cosine's edge are panel edges, split at the sun; "
         f"{4 * nodes * nodes:,} directions per normal), plus the sun as a delta of its illuminance "
-        "(`skysh.solar.illuminance_rgb`, the spectral model), plus a Lambertian ground of radiance rho E_h / pi "
+        "(`skysh.model.solar.illuminance_rgb`, the spectral model), plus a Lambertian ground of radiance rho E_h / pi "
         "(E_h the brute-force horizontal irradiance of sky and sun) over the lower lune. No SH enters the truth. "
         "Errors relative to the scene's mean irradiance (per channel, worst channel): worst over normals and RMS. "
         f"The {4 * check * check:,}-direction rule agrees with it to {sig(100 * max(d['convergence']))}% of the mean.",

@@ -10,7 +10,7 @@ Nothing in ``skysh`` imports this package (``tests/test_layers.py`` checks it).
     from the shipped runtime or the reference projection (named, never a silent
     fallback).
 -   :mod:`studies.quantize_study`: the Table 3 of Wiederien and Sloan (2024,
-    seed 002) on sky data, with :func:`skysh.quantize.table3_errors`.
+    seed 002) on sky data, with :func:`skysh.post.quantize.table3_errors`.
 -   :mod:`studies.hazel_study`: the sky's exact irradiance and the accuracy of
     linear L1, Geomerics' non-linear L1, L2 and deringed L2 against it (seed 003).
 

@@ -3,8 +3,8 @@ Irradiance reconstructions against the sky's exact irradiance
 =============================================================
 
 Seed 003 (Hazel, Geomerics) gives the linear L1 and L2 irradiance and, via the
-CEDEC 2015 talk, the non-linear L1 of Geomerics (:mod:`skysh.hazel`); the
-deringing of :mod:`skysh.dering` windows the L2 radiance first. This study
+CEDEC 2015 talk, the non-linear L1 of Geomerics (:mod:`skysh.post.hazel`); the
+deringing of :mod:`skysh.post.dering` windows the L2 radiance first. This study
 measures all four on the Preetham sky:
 
 -   :func:`exact_irradiance`: the irradiance ``I = E / pi`` of the true (not
@@ -28,8 +28,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from skysh import dering, hazel, preetham, sh
-from skysh._checks import as_float_array, check_count
+from skysh.checks import as_float_array, check_count
+from skysh.model import preetham
+from skysh.post import dering, hazel
+from skysh.sh import basis as sh
 from studies.sky import reference_sh, sample_sky_parameters
 
 __all__ = [
@@ -82,7 +84,7 @@ COSTS: dict[str, dict[str, Any]] = {
         "floats_per_channel": 9,
         "alu_per_normal": 8,
         "transcendental_per_normal": 0,
-        "per_probe": "dering window search (skysh.dering), then as L2",
+        "per_probe": "dering window search (skysh.post.dering), then as L2",
     },
 }
 """Hand-counted shader cost per normal and colour channel (multiply-adds; transcendental = sqrt,
@@ -119,7 +121,7 @@ def exact_irradiance(
 
     Notes
     -----
-    ``sum_lm (A_l / pi) L_lm Y_lm(n)`` with ``L_lm`` from :func:`skysh.preetham.sky_sh`
+    ``sum_lm (A_l / pi) L_lm Y_lm(n)`` with ``L_lm`` from :func:`skysh.model.preetham.sky_sh`
     and the clamped-cosine factors A_l of Ramamoorthi and Hanrahan (2001). A direct quadrature of
     ``L max(0, n.w)`` is the other route but needs a rule per normal to resolve the
     kink along n.w = 0 (the tests do that, as the independent reference).
@@ -171,7 +173,7 @@ def irradiance_comparison(
     exact_bands
         Bands of the "exact" irradiance (:func:`exact_irradiance`), [10, 64].
     n_theta
-        Gauss nodes in cos(theta) of the sphere of normals, [2, :data:`skysh.sh.MAX_GAUSS_NODES`].
+        Gauss nodes in cos(theta) of the sphere of normals, [2, :data:`skysh.sh.basis.MAX_GAUSS_NODES`].
 
     Returns
     -------
@@ -215,8 +217,8 @@ def irradiance_comparison(
     estimates = _estimates(coeffs, normals)
     return {
         "rows": [_error_row(method, estimates[method], exact, scale, area) for method in METHODS],
-        "notes": [f"exact irradiance: {exact_bands}-band projection of the true sky (skysh.preetham.sky_sh)",
-                  "L2 deringed: skysh.dering.dering(coeffs, target='irradiance') (windowed radiance SH), then as L2"],
+        "notes": [f"exact irradiance: {exact_bands}-band projection of the true sky (skysh.model.preetham.sky_sh)",
+                  "L2 deringed: skysh.post.dering.dering(coeffs, target='irradiance') (windowed radiance SH), then as L2"],
         "truncation": float(np.max(np.abs(exact - truncated) / scale)),
         "points": int(ts.size),
         "exact_bands": exact_bands,

@@ -5,7 +5,7 @@ The Table 3 of Wiederien and Sloan (2024) on sky data
 The seed's Table 3 (seed 002) measures the compression error of the codec with
 the prior bound sqrt(5) and the tight bound sqrt(15)/2 on a light-probe set;
 :func:`table3_experiment` runs the same measurement
-(:func:`skysh.quantize.table3_errors`) on Preetham skies spread over the fitted
+(:func:`skysh.post.quantize.table3_errors`) on Preetham skies spread over the fitted
 domain, and :func:`l1_rule_check` measures how converged its L1 quadrature is.
 ``tools/quantize_experiment.py`` prints both.
 """
@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from skysh import quantize
+from skysh.post import quantize
 from studies.sky import sample_sky_parameters, sky_coefficients
 
 __all__ = ["table3_experiment", "l1_rule_check"]
@@ -23,7 +23,7 @@ __all__ = ["table3_experiment", "l1_rule_check"]
 def table3_experiment(n_points: int = 1024, seed: int | None = 0, bits: int = quantize.DEFAULT_BITS, source: str = "runtime",
                       n_theta: int = quantize.TABLE3_THETA_NODES) -> dict[str, Any]:
     """
-    The seed's Table 3 on sky data: :func:`skysh.quantize.table3_errors` over many sky points.
+    The seed's Table 3 on sky data: :func:`skysh.post.quantize.table3_errors` over many sky points.
 
     Parameters
     ----------
@@ -31,14 +31,14 @@ def table3_experiment(n_points: int = 1024, seed: int | None = 0, bits: int = qu
         Number and seed of the (sun zenith, sun azimuth, turbidity) points
         (:func:`studies.sky.sample_sky_parameters`).
     bits, n_theta
-        As in :func:`skysh.quantize.table3_errors`.
+        As in :func:`skysh.post.quantize.table3_errors`.
     source
         As in :func:`studies.sky.sky_coefficients`: ``"runtime"`` or ``"reference"``.
 
     Returns
     -------
     dict
-        The result of :func:`skysh.quantize.table3_errors` plus ``"source"``,
+        The result of :func:`skysh.post.quantize.table3_errors` plus ``"source"``,
         ``"points"`` and ``"seed"``.
     """
     ts, az, t = sample_sky_parameters(n_points, seed)

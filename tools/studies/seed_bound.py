@@ -3,8 +3,8 @@ The deringing seed's conservative bound of a 3-band minimum, kept for comparison
 ================================================================================
 
 Sloan (2017), "Deringing Spherical Harmonics" (seed 000), section 2.3: the bound the seed
-decides its windows on. :mod:`skysh.dering` decides on the exact minimum
-(:func:`skysh.shmin.exact_min`) instead; this faithful version stays as a study, for
+decides its windows on. :mod:`skysh.post.dering` decides on the exact minimum
+(:func:`skysh.sh.minimum.exact_min`) instead; this faithful version stays as a study, for
 the error report's chart of its slack (``tools/report/s05_dering.py``) and
 ``tools/dering_experiment.py``.
 
@@ -17,8 +17,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from skysh import shmin
-from skysh._checks import check_coeffs
+from skysh.checks import check_coeffs
+from skysh.sh import minimum as shmin
 
 __all__ = ["min_bound"]
 

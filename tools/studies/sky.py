@@ -5,7 +5,7 @@ Sky points over the fitted domain and their SH
 -   :func:`sample_sky_parameters`: (sun zenith, sun azimuth, turbidity) points,
     low-discrepancy over the fitted domain (:data:`skysh.domain.SKY`,
     :data:`skysh.domain.SKY`).
--   :func:`reference_sh`: the reference projection :func:`skysh.preetham.sky_sh`
+-   :func:`reference_sh`: the reference projection :func:`skysh.model.preetham.sky_sh`
     at many points, any band count.
 -   :func:`sky_coefficients`: 9-coefficient RGB SH at many points from a *named*
     source, the shipped runtime or the reference.
@@ -18,8 +18,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from skysh import preetham
-from skysh._checks import (
+from skysh.checks import (
     MAX_ARRAY_ELEMENTS,
     as_float_array,
     check_choice,
@@ -28,12 +27,13 @@ from skysh._checks import (
     check_seed,
 )
 from skysh.domain import SKY
+from skysh.model import preetham
 
 __all__ = ["SKY_SOURCES", "SKY_PARAMETERS", "sample_sky_parameters", "reference_sh", "sky_coefficients"]
 
 SKY_SOURCES: tuple[str, ...] = ("runtime", "reference")
 """Sky data sources of :func:`sky_coefficients`: the shipped runtime (:class:`skysh.SkySH`, its
-polynomial fit) or the reference projection (:func:`skysh.preetham.sky_sh`). There is no automatic
+polynomial fit) or the reference projection (:func:`skysh.model.preetham.sky_sh`). There is no automatic
 choice: a study says which data it measures."""
 
 SKY_PARAMETERS: int = 3
@@ -76,13 +76,13 @@ def sample_sky_parameters(n: int, seed: int | None = 0) -> tuple[NDArray, NDArra
 
 def reference_sh(sun_zenith: NDArray, turbidity: NDArray, sun_azimuth: NDArray, bands: int) -> NDArray[np.float64]:
     """
-    (P, bands^2, 3) reference projections :func:`skysh.preetham.sky_sh` of P sky points.
+    (P, bands^2, 3) reference projections :func:`skysh.model.preetham.sky_sh` of P sky points.
 
     Parameters
     ----------
     sun_zenith, turbidity, sun_azimuth
         Shape (P,) each: radians, [1.7, 10] (the model's domain), radians; each
-        point is validated by :func:`skysh.preetham.sky_sh`.
+        point is validated by :func:`skysh.model.preetham.sky_sh`.
     bands
         Bands of the projection, [1, 64].
 

@@ -1,0 +1,1 @@
+"""The command line, the viewer and the renders."""

@@ -1,0 +1,1 @@
+"""Self-contained C, GLSL, HLSL, JavaScript and JSON that reproduce the runtime."""

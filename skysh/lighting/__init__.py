@@ -1,0 +1,1 @@
+"""The sun's position, the sun's light from the file, the sun and ground as SH."""

@@ -1,0 +1,1 @@
+"""Algorithms on SH coefficients alone: deringing, 8-bit quantization, the normalised basis."""

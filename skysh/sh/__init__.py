@@ -1,0 +1,1 @@
+"""Real spherical harmonics: layout, basis, projection, rotation, the exact minimum."""
