@@ -40,26 +40,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = [
-    "MAX_ARRAY_ELEMENTS",
-    "as_float_array",
-    "check_range",
-    "check_scalar",
-    "check_cutoff",
-    "check_dirs",
-    "check_bands",
-    "check_coeffs",
-    "check_count",
-    "check_seed",
-    "check_size",
-    "check_flag",
-    "check_choice",
-    "number_text",
-    "integer_text",
-    "interval_text",
-    "short_repr",
-    "read_only",
-]
+__all__ = ["MAX_ARRAY_ELEMENTS", "as_float_array", "check_range", "check_scalar", "check_cutoff", "check_dirs",
+    "check_bands", "check_coeffs", "check_count", "check_seed", "check_size", "check_flag", "check_choice",
+    "number_text", "interval_text", "short_repr", "read_only"]
 
 MAX_ARRAY_ELEMENTS: int = 1 << 28
 """Largest number of values (268,435,456; 2 GiB of float64) of any one array a skysh function

@@ -47,10 +47,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from skysh.checks import check_count, check_range, interval_text, number_text, short_repr
 
-__all__ = [
-    "KASTEN_COEFFICIENTS", "TRANSFORMS", "MAX_DEGREE", "TERM_ORDER",
-    "Variable", "Domain", "SKY", "SUN", "term_index", "check_degrees",
-]
+__all__ = ["KASTEN_COEFFICIENTS", "MAX_DEGREE", "TERM_ORDER", "Variable", "Domain", "SKY", "SUN", "term_index",
+    "check_degrees"]
 
 KASTEN_COEFFICIENTS: tuple[float, float, float] = (0.15, 93.885, 1.253)
 """(a, b, c) of Kasten's (1966) relative optical mass m = 1 / (cos theta + a (b - theta[deg])^-c), theta in rad."""

@@ -98,19 +98,29 @@ def check_output(path: str | os.PathLike[str], name: str = "path", may_replace: 
     if not isinstance(path, (str, os.PathLike)) or isinstance(os.fspath(path), bytes):
         raise TypeError(f"{name} must be a str or os.PathLike naming a file as text, got {type(path).__name__}")
     out = Path(path)
+    _check_kind(path, out, name, folder)
+    target = _lexical_target(out)  # a link named here is replaced, never followed: where it points is not written
+    if may_replace is not None and target == Path(may_replace).resolve():
+        return out
+    _check_outside_package(target, out, name)
+    return out
+
+
+def _check_kind(path: str | os.PathLike[str], out: Path, name: str, folder: bool) -> None:
+    """Refuse a ``path`` naming no file, or an existing directory (with ``folder``: an existing non-directory)."""
     if str(path) == "" or (not folder and out.name in ("", ".", "..")):
         raise ValueError(f"{name} {str(path)!r} names no file; give a file name")
     if folder and out.exists() and not out.is_dir():
         raise ValueError(f"{name} {out} is a file; give a folder")
     if not folder and out.is_dir():
         raise ValueError(f"{name} {out} is a directory; give a file name")
-    target = _lexical_target(out)  # a link named here is replaced, never followed: where it points is not written
-    if may_replace is not None and target == Path(may_replace).resolve():
-        return out
+
+
+def _check_outside_package(target: Path, out: Path, name: str) -> None:
+    """Refuse an output whose ``target`` (:func:`_lexical_target` of ``out``) lies inside :func:`package_dirs`."""
     for package in package_dirs():
         if target == package or package in target.parents:
             raise ValueError(f"{name} {out} lies inside skysh's own files ({package}); write somewhere else")
-    return out
 
 
 def _temporary(path: Path) -> Path:

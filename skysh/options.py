@@ -68,10 +68,15 @@ def check_albedo(ground_albedo: Any) -> tuple[float, float, float] | None:
         return None if value == 0.0 else (value, value, value)
     if (kind is tuple or kind is list) and len(ground_albedo) == 3:  # three Python floats in range: no numpy
         r, g, b = ground_albedo
-        if type(r) is float and type(g) is float and type(b) is float and low <= r <= high and low <= g <= high \
-                and low <= b <= high:
+        if _plain_in_range(r, g, b, low, high):
             return None if r == 0.0 and g == 0.0 and b == 0.0 else (r, g, b)
     return _array_albedo(ground_albedo)
+
+
+def _plain_in_range(r: Any, g: Any, b: Any, low: float, high: float) -> bool:
+    """Whether ``r``, ``g`` and ``b`` are Python floats in [``low``, ``high``] (:func:`check_albedo`'s no-numpy path)."""
+    return type(r) is float and type(g) is float and type(b) is float and low <= r <= high and low <= g <= high \
+        and low <= b <= high
 
 
 def _array_albedo(ground_albedo: Any) -> tuple[float, float, float] | None:
@@ -199,11 +204,7 @@ class Options:
             raise ValueError(f"engine must be None or an engine preset's name (skysh.engines.presets.ENGINES), got "
                              f"{short_repr(engine)}")
         diffuse = irradiance or engine is not None  # the intent
-        if irradiance_table is None:  # by intent: the table for diffuse light at 3 bands
-            table = diffuse and has_table and gibbs is not True and dering is not False \
-                and check_bands(bands, high=max_bands) == 3
-        else:  # as asked (True: checked that the file, the bands and the filter allow it)
-            table = check_flag(irradiance_table, "irradiance_table") and _table_allowed(bands, gibbs, has_table, max_bands)
+        table = _resolve_table(irradiance_table, diffuse, bands, gibbs, dering, has_table, max_bands)
         gibbs = not (diffuse or table) if gibbs is None else gibbs  # by intent: on for radiance only
         dering = diffuse if dering is None else dering  # by intent: on for diffuse light (the table: no search needed)
         sun = sun if sun is False else check_flag(sun, "sun")
@@ -211,6 +212,16 @@ class Options:
         if colourspace is not None and not isinstance(colourspace, str):  # before any work, naming it
             raise ValueError(f"colourspace must be None or a colour-science RGB colourspace name, got {short_repr(colourspace)}")
         return cls(check_bands(bands, high=max_bands), gibbs, dering, irradiance, table, sun, albedo, colourspace, engine)
+
+
+def _resolve_table(irradiance_table: Any, diffuse: bool, bands: Any, gibbs: bool | None, dering: bool | None,
+                   has_table: bool, max_bands: int) -> bool:
+    """:meth:`Options.resolve`'s ``irradiance_table``: by intent for None, else as asked (checked)."""
+    if irradiance_table is None:  # by intent: the table for diffuse light at 3 bands
+        return diffuse and has_table and gibbs is not True and dering is not False \
+            and check_bands(bands, high=max_bands) == 3
+    # as asked (True: checked that the file, the bands and the filter allow it)
+    return check_flag(irradiance_table, "irradiance_table") and _table_allowed(bands, gibbs, has_table, max_bands)
 
 
 def _table_allowed(bands: Any, gibbs: bool | None, has_table: bool, max_bands: int) -> bool:

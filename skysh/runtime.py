@@ -137,24 +137,11 @@ class _Plan:
         ``rows_from``: the m >= 0 rows from this table (the file's irradiance table, 3 groups) instead of
         the sky's. ``lobe``: fold the clamped-cosine factors A_l into them (irradiance out)."""
         self.bands = bands
-        own = sky_table.degrees[:bands] if rows_from is None else rows_from.degrees
-        d = np.max(np.concatenate([own, sky_table.degrees[1:2]]) if c10 and rows_from is not None else own, axis=0)
-        self.degrees = (int(d[0]), int(d[1]))
+        self.degrees = _plan_degrees(sky_table, bands, c10, rows_from)
         k = bands * bands
         k_half = bands * (bands + 1) // 2
         lms = [sh.lm(i) for i in range(k)]
-        rows = sky_table if rows_from is None else rows_from
-        half = _terms(rows.table, rows.max_degrees, self.degrees)[:, :k_half]  # (T, K_half, 3), m >= 0 rows
-        if lobe:
-            half *= sh.cosine_lobe(bands)[[l for l, _ in coefficient_file.zonal_half_layout(bands)]][:, None]
-        if c10:  # (1, 0) is row 1 of the sky's layout (a 1-band file has none: zeros, the ground is refused)
-            extra = _terms(sky_table.table, sky_table.max_degrees, self.degrees)[:, 1:2]
-            half = np.concatenate([half, extra if sky_table.bands > 1 else np.zeros((half.shape[0], 1, 3))], axis=1)
-        if gibbs:  # Habel eq. (5) folded into the zonal rows (the seed's own optimisation)
-            factors = gibbs_factors(bands)
-            for row, (l, m) in enumerate(coefficient_file.zonal_half_layout(bands)):
-                if m == 0:
-                    half[:, row] *= factors[l]
+        half = _half_rows(sky_table, bands, gibbs, c10, rows_from, lobe, self.degrees)
         # Scalar path: the m >= 0 table, contracted in theta then in turbidity.
         self.half_table = np.ascontiguousarray(half.reshape(self.degrees[0] + 1, -1))
         # Source (m >= 0 row, channel) and rotation factor of every output value;
@@ -168,15 +155,10 @@ class _Plan:
         self.table_flat = np.ascontiguousarray(half[:, columns].reshape(half.shape[0], -1))
         self.batch_rot_index = np.concatenate([self.rot_index, np.zeros(len(columns) - len(source), np.intp)])
         self.lobe = sh.cosine_lobe(bands)[np.array([l for l, _ in lms])][:, None]
-        # Scalar path: packed = cos(angle_map @ (acos x, acos y, phi, 1)) holds T_0..T_dx(x),
-        # T_0..T_dy(y), cos(m phi) and sin(m phi) = cos(m phi - pi/2), m = 0 .. N - 1.
+        # Scalar path: packed = cos(angle_map @ (acos x, acos y, phi, 1)), split into T(x), T(y), the rotation.
         dx, dy = self.degrees
         self.split = (dx + 1, dx + dy + 2)
-        multiplier = np.concatenate([np.arange(dx + 1), np.arange(dy + 1), np.arange(bands), np.arange(bands)])
-        variable = np.concatenate([np.zeros(dx + 1), np.ones(dy + 1), np.full(2 * bands, 2)]).astype(np.intp)
-        self.angle_map = np.zeros((multiplier.size, 4))
-        self.angle_map[np.arange(multiplier.size), variable] = multiplier
-        self.angle_map[dx + dy + 2 + bands :, 3] = -0.5 * math.pi
+        self.angle_map = _angle_map(self.degrees, bands)
         # Output value (i, channel) = half[gather[i, channel]] * packed[rotation[i]].
         self.gather = 3 * source[:, None] + np.arange(3)
         self.rotation = np.repeat((dx + dy + 2 + self.rot_index)[:, None], 3, axis=1)  # (N^2, 3): no broadcast
@@ -185,6 +167,45 @@ class _Plan:
             self.angle_map, self.gather, self.rotation,
         ):
             array.flags.writeable = False
+
+
+def _plan_degrees(sky_table: coefficient_file.SkyTable, bands: int, c10: bool,
+                  rows_from: coefficient_file.NamedTable | None) -> tuple[int, int]:
+    """The (d_x, d_y) term layout of a :class:`_Plan`: its rows' largest degrees (and the sky's (1, 0) row's with ``c10``)."""
+    own = sky_table.degrees[:bands] if rows_from is None else rows_from.degrees
+    d = np.max(np.concatenate([own, sky_table.degrees[1:2]]) if c10 and rows_from is not None else own, axis=0)
+    return (int(d[0]), int(d[1]))
+
+
+def _half_rows(sky_table: coefficient_file.SkyTable, bands: int, gibbs: bool, c10: bool,
+               rows_from: coefficient_file.NamedTable | None, lobe: bool, degrees: tuple[int, int]) -> NDArray[np.float64]:
+    """(T, K_half (+ 1 with ``c10``), 3): a :class:`_Plan`'s m >= 0 rows in ``degrees``' layout, lobe and filter folded in."""
+    k_half = bands * (bands + 1) // 2
+    rows = sky_table if rows_from is None else rows_from
+    half = _terms(rows.table, rows.max_degrees, degrees)[:, :k_half]  # (T, K_half, 3), m >= 0 rows
+    if lobe:
+        half *= sh.cosine_lobe(bands)[[l for l, _ in coefficient_file.zonal_half_layout(bands)]][:, None]
+    if c10:  # (1, 0) is row 1 of the sky's layout (a 1-band file has none: zeros, the ground is refused)
+        extra = _terms(sky_table.table, sky_table.max_degrees, degrees)[:, 1:2]
+        half = np.concatenate([half, extra if sky_table.bands > 1 else np.zeros((half.shape[0], 1, 3))], axis=1)
+    if gibbs:  # Habel eq. (5) folded into the zonal rows (the seed's own optimisation)
+        factors = gibbs_factors(bands)
+        for row, (l, m) in enumerate(coefficient_file.zonal_half_layout(bands)):
+            if m == 0:
+                half[:, row] *= factors[l]
+    return half
+
+
+def _angle_map(degrees: tuple[int, int], bands: int) -> NDArray[np.float64]:
+    """(dx + dy + 2 + 2 N, 4): the scalar path's packed = cos(angle_map @ (acos x, acos y, phi, 1)) holds
+    T_0..T_dx(x), T_0..T_dy(y), cos(m phi) and sin(m phi) = cos(m phi - pi/2), m = 0 .. N - 1."""
+    dx, dy = degrees
+    multiplier = np.concatenate([np.arange(dx + 1), np.arange(dy + 1), np.arange(bands), np.arange(bands)])
+    variable = np.concatenate([np.zeros(dx + 1), np.ones(dy + 1), np.full(2 * bands, 2)]).astype(np.intp)
+    angle_map = np.zeros((multiplier.size, 4))
+    angle_map[np.arange(multiplier.size), variable] = multiplier
+    angle_map[dx + dy + 2 + bands :, 3] = -0.5 * math.pi
+    return angle_map
 
 
 class SkySH:

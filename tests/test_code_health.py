@@ -67,10 +67,11 @@ ROOT: Path = Path(__file__).resolve().parent.parent
 code_size = load_script(TOOLS / "code_size.py", "code_size_under_test")
 """``tools/code_size.py`` (issue 24's code-line measure), loaded as a module."""
 
-MAX_FUNCTION_LINES: int = 80
-"""Issue 14: a function that fits on a screen and a half."""
-MAX_COMPLEXITY: int = 20
-"""Issue 14: radon's grade D starts at 21 ("more than moderate risk")."""
+MAX_FUNCTION_LINES: int = 60
+"""Issue 24: code lines per function (``tools/code_size.py``'s count: docstrings, comments and blank
+lines are free, so prose is never squeezed to pay for code)."""
+MAX_COMPLEXITY: int = 15
+"""Issue 24: radon's grade C ends at 20; 15 keeps a function's paths few enough to test each."""
 
 SIZE_SCOPE: tuple[str, ...] = ("skysh", "tools")
 """Folders held to the size and complexity limits."""
@@ -146,12 +147,15 @@ def _functions(tree: ast.AST, prefix: str = "") -> Iterator[tuple[str, ast.Funct
             yield from _functions(node, prefix)
 
 
-def function_lengths(path: str, tree: ast.AST) -> list[Violation]:
+def function_lengths(path: str, source: str) -> list[Violation]:
+    """Functions of more than :data:`MAX_FUNCTION_LINES` code lines (a nested function counts in its parent too)."""
+    tree = ast.parse(source)
+    code = sorted(code_size.code_lines(source, tree))
     found = []
     for name, node in _functions(tree):
-        length = (node.end_lineno or node.lineno) - node.lineno + 1
+        length = sum(node.lineno <= line <= (node.end_lineno or node.lineno) for line in code)
         if length > MAX_FUNCTION_LINES:
-            found.append(Violation(path, node.lineno, f"function {name} of {length} lines > {MAX_FUNCTION_LINES}"))
+            found.append(Violation(path, node.lineno, f"function {name} of {length} code lines > {MAX_FUNCTION_LINES}"))
     return found
 
 
@@ -183,6 +187,14 @@ def _resolve_from(node: ast.ImportFrom, own: str, is_package: bool) -> str:
     return ".".join(base + ([node.module] if node.module else []))
 
 
+def package_of(dotted: str) -> str:
+    """The package privacy is shared in (issue 24): a ``skysh`` sub-package (``skysh.export.js`` ->
+    ``skysh.export``), a module of ``skysh/``'s root on its own (``skysh.domain``), the tools' first name
+    (``report.common`` -> ``report``). An object's dotted origin maps to its module's package."""
+    parts = dotted.split(".")
+    return ".".join(parts[:2]) if parts[0] == "skysh" else parts[0]
+
+
 def _bindings(tree: ast.AST, own: str, is_package: bool, modules: frozenset[str]) -> tuple[dict[str, str], list[Violation]]:
     """Names bound to other first-party modules or their objects (name -> dotted origin),
     and the ``from M import _name`` violations met on the way (path left blank)."""
@@ -191,19 +203,19 @@ def _bindings(tree: ast.AST, own: str, is_package: bool, modules: frozenset[str]
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):
             for alias in node.names:
-                if _is_first_party(alias.name, modules) and alias.name != own:
+                if _is_first_party(alias.name, modules) and package_of(alias.name) != package_of(own):
                     if alias.asname:
                         bound[alias.asname] = alias.name
                     else:
                         bound[alias.name.split(".")[0]] = alias.name.split(".")[0]
         elif isinstance(node, ast.ImportFrom):
             origin = _resolve_from(node, own, is_package)
-            if not _is_first_party(origin, modules) or origin == own:
+            if not _is_first_party(origin, modules) or package_of(origin) == package_of(own):
                 continue
             for alias in node.names:
                 target = f"{origin}.{alias.name}"
                 if _is_private(alias.name) and target not in modules:
-                    found.append(Violation("", node.lineno, f"from {origin} import {alias.name}: another module's private name"))
+                    found.append(Violation("", node.lineno, f"from {origin} import {alias.name}: another package's private name"))
                 bound[alias.asname or alias.name] = target
     return bound, found
 
@@ -253,13 +265,16 @@ def reach_ins(path: str, tree: ast.AST, own: str, is_package: bool = False,
     bound, found = _bindings(tree, own, is_package, modules)
     found = [v._replace(path=path) for v in found]
     mine = _self_privates(tree)
-    foreign = {name: f"{owner}'s instance attribute" for name, owner in instance_names.items() if owner != own}
+    foreign = {name: f"{owner}'s instance attribute" for name, owner in instance_names.items()
+               if package_of(owner) != package_of(own)}
     foreign |= {name: why for name, why in KNOWN_INSTANCE_PRIVATES.items()}
     for node in ast.walk(tree):
         if isinstance(node, ast.Attribute) and _is_private(node.attr):
             origin = _dotted(node.value, bound)
-            if origin is not None:
+            if origin is not None and package_of(origin) != package_of(own):
                 found.append(Violation(path, node.lineno, f"{ast.unparse(node)}: private {node.attr} of {origin}"))
+            elif origin is not None:
+                continue
             elif node.attr in foreign and node.attr not in mine and not (
                     isinstance(node.value, ast.Name) and node.value.id in ("self", "cls")):
                 found.append(Violation(path, node.lineno, f"{ast.unparse(node)}: {foreign[node.attr]}"))
@@ -269,8 +284,8 @@ def reach_ins(path: str, tree: ast.AST, own: str, is_package: bool = False,
             if verb in ("getattr", "setattr", "delattr") and isinstance(name, ast.Constant) \
                     and isinstance(name.value, str) and _is_private(name.value):
                 origin = _dotted(node.args[0], bound)
-                if origin is not None:
-                    found.append(Violation(path, node.lineno, f"{verb}({origin}, {name.value!r}): private of another module"))
+                if origin is not None and package_of(origin) != package_of(own):
+                    found.append(Violation(path, node.lineno, f"{verb}({origin}, {name.value!r}): private of another package"))
     return found
 
 
@@ -384,11 +399,11 @@ def _check(found: list[Violation], rule: str) -> None:
 
 def test_scope_is_not_empty():
     files = python_files(SIZE_SCOPE)
-    assert any(p.name == "sh.py" for p in files) and any("report" in p.parts for p in files)
+    assert any(p.name == "basis.py" for p in files) and any("report" in p.parts for p in files)
 
 
 def test_function_length():
-    found = [v for p in python_files(SIZE_SCOPE) for v in function_lengths(_rel(p), _parsed(p)[1])]
+    found = [v for p in python_files(SIZE_SCOPE) for v in function_lengths(_rel(p), _parsed(p)[0])]
     _check(found, "function length")
 
 
@@ -434,12 +449,14 @@ def _branchy(n: int) -> str:
 
 
 def test_negative_control_sizes():
-    long_body = "".join(f"        y{i} = {i}\n" for i in range(MAX_FUNCTION_LINES))  # def line + 80 = 81 lines
+    long_body = "".join(f"        y{i} = {i}\n" for i in range(MAX_FUNCTION_LINES))  # def line + 60 = 61 code lines
     source = f"class A:\n    def long(self):\n{long_body}\n"
-    found = function_lengths("m.py", ast.parse(source))
-    assert [v.what for v in found] == [f"function A.long of {MAX_FUNCTION_LINES + 1} lines > {MAX_FUNCTION_LINES}"]
+    found = function_lengths("m.py", source)
+    assert [v.what for v in found] == [f"function A.long of {MAX_FUNCTION_LINES + 1} code lines > {MAX_FUNCTION_LINES}"]
     at_limit = "def short():\n" + "".join(f"    y{i} = {i}\n" for i in range(MAX_FUNCTION_LINES - 1))
-    assert not function_lengths("m.py", ast.parse(at_limit))
+    assert not function_lengths("m.py", at_limit)
+    prose = '    """\n' + "    Prose.\n" * 100 + '    """\n    # a comment\n\n'
+    assert not function_lengths("m.py", "def documented():\n" + prose + at_limit.split("\n", 1)[1])  # prose is free
 
 
 def test_negative_control_complexity():
@@ -510,10 +527,19 @@ def test_negative_control_private_methods():
                      modules=modules, instance_names=owners) == []
 
 
-@pytest.mark.parametrize("relative", ["from . import _x", "from .common import _y"])
-def test_negative_control_relative_imports(relative):
-    modules = frozenset({"report", "report.common", "report.run"})
-    assert reach_ins("m.py", ast.parse(relative), "report.run", modules=modules, instance_names={})
+@pytest.mark.parametrize(("source", "own", "flagged"), [
+    ("from . import _x", "report.run", False),  # inside its package: shared (issue 24's package privacy)
+    ("from .common import _y", "report.run", False),
+    ("from studies.sky import _z", "report.run", True),  # another package's private
+    ("from skysh.export.lights import _x", "skysh.export.js", False),
+    ("from skysh.export.lights import _x", "skysh.app.cli", True),
+    ("from skysh.checks import _x", "skysh.domain", True),  # root modules are packages of their own
+])
+def test_negative_control_package_privacy(source, own, flagged):
+    modules = frozenset({"report", "report.common", "report.run", "studies", "studies.sky", "skysh", "skysh.export",
+                         "skysh.export.lights", "skysh.export.js", "skysh.app", "skysh.app.cli", "skysh.checks",
+                         "skysh.domain"})
+    assert bool(reach_ins("m.py", ast.parse(source), own, modules=modules, instance_names={})) == flagged
 
 
 PROSE_CASES: list[tuple[str, bool]] = [
@@ -697,14 +723,36 @@ def test_code_size_of_skysh():
     for m in report.modules:
         assert 0 <= m.code_strings <= m.code < m.physical, m
     package, export = report.groups
-    exports = [m for m in report.modules if m.name in code_size.EXPORT_MODULES]
+    exports = [m for m in report.modules if m.name.startswith(code_size.EXPORT_PACKAGE + ".")
+               or m.name == code_size.EXPORT_PACKAGE]
     for group, members in ((package, report.modules), (export, exports)):
         assert group.modules == len(members) and group.physical == sum(m.physical for m in members)
         assert (group.code, group.code_strings, group.all_names) == tuple(
             sum(getattr(m, c) for m in members) for c in ("code", "code_strings", "all_names"))
-    assert export.modules == len(code_size.EXPORT_MODULES) and 0 < export.code_strings < export.code < package.code
+    assert export.modules == len(exports) > 1 and export.code < package.code
     assert [m.code for m in report.modules] == sorted((m.code for m in report.modules), reverse=True)
     assert any(i.in_function for i in report.imports) and any(not i.in_function for i in report.imports)
     names = {m.name for m in report.modules}
     assert all(set(cycle) <= names and len(cycle) > 1 for cycle in report.cycles)
 
+
+
+# --------------------------------------------------------------------------- #
+# Issue 24's rules over the real package
+# --------------------------------------------------------------------------- #
+def test_every_package_within_its_budget():
+    """Each package's code lines at most its budget (``tools/code_size.py``'s PACKAGE_BUDGETS), every package budgeted."""
+    report = code_size.measure_repository(ROOT)
+    names = {p.name for p in report.packages}
+    assert names == set(code_size.PACKAGE_BUDGETS), names ^ set(code_size.PACKAGE_BUDGETS)
+    over = [f"{p.name}: {p.code} code lines > {code_size.PACKAGE_BUDGETS[p.name]}" for p in report.packages
+            if p.code > code_size.PACKAGE_BUDGETS[p.name]]
+    assert not over, over
+
+
+def test_the_export_package_writes_no_statements():
+    """No multi-line string holding ``;`` or ``{`` in the export package's Python: the code lives in its templates."""
+    report = code_size.measure_repository(ROOT)
+    found = [f"{m.path}: {m.code_strings} lines" for m in report.modules
+             if m.name.startswith(code_size.EXPORT_PACKAGE) and m.code_strings]
+    assert not found, found

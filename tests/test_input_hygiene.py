@@ -517,7 +517,8 @@ OTHER_ROWS: list[Row] = [
         dict(coeffs=Coeffs(), engine=Choice(("threejs", "filament", "unity")))),
     Row("engines.snippet", _other("engines.presets", "snippet"), dict(coeffs=C9, engine="threejs"),
         dict(coeffs=Coeffs(batch=False), engine=Choice(("threejs", "filament", "unity")))),
-    Row("engines.sun_direction", _other("engines.presets", "sun_direction"), dict(sun_zenith=0.5, sun_azimuth=0.2, engine="unity"),
+    Row("engines.sun_direction", _other("engines.presets", "sun_direction"),
+        dict(sun_zenith=0.5, sun_azimuth=0.2, engine="unity"),
         dict(sun_zenith=Number(0.0, math.pi), sun_azimuth=Number(), engine=Choice(("threejs", "filament", "unity")))),
     # skysh.post.quantize
     Row("quantize.words_per_channel", _other("post.quantize", "words_per_channel"), dict(bits=8), dict(bits=Count(2, 32))),

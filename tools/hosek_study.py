@@ -273,7 +273,8 @@ def section_mitsuba() -> None:
           f"{compare(mi, lambda ts, phi, tu, a: (ts, 0.5 * math.pi - phi, tu, a)):.1e} x the tolerance")
 
 
-def main(argv: list[str] | None = None) -> None:
+def build_parser() -> argparse.ArgumentParser:
+    """The command line: a flag per section, and the ``--fit`` section's settings."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[1], formatter_class=argparse.RawTextHelpFormatter)
     for name in ("minima", "albedo", "turbidity", "fit", "datasets", "mitsuba"):
         parser.add_argument(f"--{name}", action="store_true", help=f"print the {name} section")
@@ -282,7 +283,11 @@ def main(argv: list[str] | None = None) -> None:
                         help="--fit: degree triples (sun variable, s, albedo), ';'-separated")
     parser.add_argument("--variable", choices=("u", "zenith"), default="u", help="--fit: the sun's variable")
     parser.add_argument("--jobs", type=int, default=1, help="worker processes for the projections")
-    args = parser.parse_args(argv)
+    return parser
+
+
+def fit_settings(parser: argparse.ArgumentParser, args: argparse.Namespace) -> tuple[list[int], list[tuple[int, ...]]]:
+    """The dataset checked, then ``--intervals`` and ``--degrees`` parsed and checked (one line, exit 2)."""
     try:
         hosek_data.dataset_path()
     except hosek_data.HosekDataError as error:
@@ -291,6 +296,13 @@ def main(argv: list[str] | None = None) -> None:
     candidates = [tuple(int(d) for d in triple.split(",")) for triple in args.degrees.split(";")]
     if any(not 1 <= k <= 9 for k in intervals) or any(len(c) != 3 or min(c) < 0 for c in candidates):
         parser.error("--intervals are integers in 1..9; --degrees triples of integers >= 0")
+    return intervals, candidates
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    intervals, candidates = fit_settings(parser, args)
     chosen = [n for n in ("minima", "albedo", "turbidity", "fit", "datasets", "mitsuba") if getattr(args, n)]
     for name in chosen or ["minima", "albedo", "turbidity", "datasets"]:
         if name == "fit":

@@ -21,7 +21,7 @@ import argparse
 import re
 from collections.abc import Callable
 
-__all__ = ["FLOAT64_TINY", "integer", "real"]
+__all__ = ["integer"]
 
 FLOAT64_TINY: float = 2.2250738585072014e-308
 """Smallest positive normal float64 (numpy.finfo(float).tiny): a smaller non-zero value has lost precision."""

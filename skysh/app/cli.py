@@ -17,7 +17,7 @@ Commands::
     skysh export  --format c|glsl|hlsl|json|js --out FILE [--bands N] [--engine NAME]   tables + evaluation code
     skysh view    [--out DIR] [--open] [--port N]                                the interactive viewer page
     skysh render  --sun-zenith DEG --sun-azimuth DEG --turbidity T --out FILE.png
-    skysh fit     ...   tools/fit_sky.py (source checkout only)
+    skysh fit     ...   skysh.app.fit_command (the tools extra brings cvxpy)
     skysh report  ...   tools/error_report.py (source checkout only)
 
 Angles are **degrees** on the command line (the library takes radians).
@@ -59,8 +59,7 @@ if TYPE_CHECKING:  # pragma: no cover
     import numpy as np
     from numpy.typing import NDArray
 
-__all__ = ["COEFF_FORMATS", "TOOL_COMMANDS", "TABLE_ZERO_BELOW", "EXIT_USAGE", "EXIT_INTERNAL", "build_parser",
-           "format_coefficients", "normalise_factor", "main"]
+__all__ = ["TABLE_ZERO_BELOW", "build_parser", "main"]
 
 COEFF_FORMATS: tuple[str, ...] = ("table", "json", "csv", "glsl", "hlsl", "c", "snippet")
 """Output formats of ``skysh coeffs`` (``snippet``: code for the ``--engine``'s own API)."""
@@ -68,8 +67,9 @@ COEFF_FORMATS: tuple[str, ...] = ("table", "json", "csv", "glsl", "hlsl", "c", "
 ENGINE_FORMATS: tuple[str, ...] = ("table", "json", "csv", "snippet")
 """The formats that go with ``--engine`` (the constant arrays are skysh's own layout)."""
 
-TOOL_COMMANDS: dict[str, str] = {"fit": "fit_sky.py", "report": "error_report.py"}
-"""Commands that run a script of the source checkout's ``tools/`` folder."""
+TOOL_COMMANDS: dict[str, str] = {"fit": "skysh.app.fit_command", "report": "error_report.py"}
+"""Commands run by another module's ``main(argv)``: a module of the package (``skysh fit``, which works
+from an installed wheel), or a script of the source checkout's ``tools/`` folder (``skysh report``)."""
 
 EXIT_USAGE: int = 2
 """Exit status of every refusal (argparse's own convention for bad usage)."""
@@ -269,7 +269,7 @@ def _add_view_parser(commands: Any) -> None:
 
 def build_parser() -> argparse.ArgumentParser:
     """The parser of the ``skysh`` command (subcommands coeffs, export, render, fit, report)."""
-    from skysh import __version__
+    from skysh._version import __version__
 
     parser = _Parser(
         prog="skysh",
@@ -404,9 +404,9 @@ def _cmd_coeffs(args: argparse.Namespace) -> int:
     sun = _sun_angles(args)
     _check_turbidity(args.turbidity)
     from skysh import SkySH
+    from skysh._version import __version__
     from skysh.options import Options
     from skysh.sh import basis as sh
-    from skysh import __version__
 
     sky = SkySH.load()
     _check_coeffs_options(args, sky)
@@ -606,22 +606,36 @@ def _tools_dir() -> Path | None:
     return tools if tools.is_dir() and (root / "pyproject.toml").is_file() else None
 
 
-def _run_tool(command: str, argv: list[str]) -> int:
-    """Run ``tools/<script>``'s ``main(argv)`` from the source checkout; refuse clearly elsewhere."""
+def _tool_loader(command: str) -> Any:
+    """A function importing ``command``'s module: the package's, or ``tools/<script>`` of the source checkout."""
+    import importlib
     import importlib.util
 
-    script = TOOL_COMMANDS[command]
+    target = TOOL_COMMANDS[command]
+    if not target.endswith(".py"):
+        return lambda: importlib.import_module(target)
     tools = _tools_dir()
-    path = None if tools is None else tools / script
+    path = None if tools is None else tools / target
     if path is None:
-        raise _UsageError(f"'skysh {command}' runs tools/{script}, which is only in a source checkout of skysh (this "
+        raise _UsageError(f"'skysh {command}' runs tools/{target}, which is only in a source checkout of skysh (this "
                           "skysh is installed without its tools/ folder); clone the repository and run it there")
     if not path.is_file():
-        raise _UsageError(f"'skysh {command}' runs tools/{script}, which this source checkout lacks ({path})")
+        raise _UsageError(f"'skysh {command}' runs tools/{target}, which this source checkout lacks ({path})")
     spec = importlib.util.spec_from_file_location(f"skysh_tools_{path.stem}", path)
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = module  # dataclasses (and pickling for process pools) look modules up here
+
+    def load() -> Any:
+        spec.loader.exec_module(module)  # type: ignore[union-attr]
+        return module
+
+    return load
+
+
+def _run_tool(command: str, argv: list[str]) -> int:
+    """Run ``command``'s ``main(argv)`` (:data:`TOOL_COMMANDS`) with one-line usage errors; refuse clearly where it is missing."""
+    load = _tool_loader(command)
     saved, saved_error = sys.argv, argparse.ArgumentParser.error
     sys.argv = [f"skysh {command}"] + argv  # so the tool's --help names the command
 
@@ -630,8 +644,7 @@ def _run_tool(command: str, argv: list[str]) -> int:
 
     argparse.ArgumentParser.error = one_line  # type: ignore[assignment]  # one-line errors inside the tools too
     try:
-        spec.loader.exec_module(module)
-        result = module.main(argv)
+        result = load().main(argv)
     except SystemExit as exit_:  # --help (0), or a tool's own exit
         code = exit_.code
         return code if isinstance(code, int) else (0 if code is None else 1)

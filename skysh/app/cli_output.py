@@ -25,10 +25,7 @@ if TYPE_CHECKING:  # pragma: no cover
     import numpy as np
     from numpy.typing import ArrayLike, NDArray
 
-__all__ = [
-    "TABLE_ZERO_BELOW", "ONE_LINE_LISTS", "format_coefficients", "format_engine", "normalise_factor",
-    "number_text", "plural", "settings_text", "lm_rows", "format_sun_light",
-]
+__all__ = ["TABLE_ZERO_BELOW"]
 
 TABLE_ZERO_BELOW: float = 1e-12
 """``--format table`` prints |value| < TABLE_ZERO_BELOW x max|DC| as 0. The rotation of ``--up y``

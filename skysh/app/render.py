@@ -59,21 +59,7 @@ from skysh.sh import basis as sh
 if TYPE_CHECKING:  # pragma: no cover
     from skysh.runtime import SkySH
 
-__all__ = [
-    "KEY_VALUE",
-    "GLYPH_WIDTH",
-    "GLYPH_HEIGHT",
-    "PANEL_WIDTH_RANGE",
-    "DEFAULT_PANEL_WIDTH",
-    "MAX_LATLONG_WIDTH",
-    "MAX_TEXT_SCALE",
-    "latlong_dirs",
-    "true_scene",
-    "tone_map",
-    "draw_text",
-    "render_image",
-    "write_png",
-]
+__all__ = ["latlong_dirs", "render_image"]
 
 KEY_VALUE: float = 0.18
 """Reinhard's key: the sky's log-average maps to this linear value before L / (1 + L)."""

@@ -82,11 +82,7 @@ from skysh import files
 if TYPE_CHECKING:  # pragma: no cover
     from skysh.runtime import SkySH
 
-__all__ = [
-    "CONNECTION_THREAD", "ERROR_RULE_MU", "ERROR_RULE_PHI", "IDLE_TIMEOUT_S", "LISTEN_BACKLOG", "LOOPBACK_HOSTS",
-    "MAX_CONNECTIONS", "PAGE_FILES", "content_security_policy", "fill_snippet", "make_server", "page_config",
-    "page_files", "serve", "snippet_templates", "write_static", "zenith_luminance_form",
-]
+__all__ = []
 
 WEB_DIR: Path = Path(__file__).with_name("web")
 """The page's source folder inside the package (shipped as package data)."""
@@ -333,11 +329,11 @@ def page_config(sky: SkySH) -> dict[str, Any]:
     sky
         The loaded runtime whose coefficient file the page's runtime is exported from.
     """
+    from skysh._version import __version__
     from skysh.app import render
     from skysh.engines import presets as engines
     from skysh.model import preetham
     from skysh.sh import basis as sh
-    from skysh import __version__
 
     recurrence = sh.basis_recurrence(sky.bands)
     return {
@@ -381,9 +377,9 @@ def page_files(sky: SkySH | None = None) -> dict[str, bytes]:
     dict
         ``{name: content}`` for every name of :data:`PAGE_FILES`.
     """
+    from skysh._version import __version__
     from skysh.export.c_like import export_source
     from skysh.runtime import SkySH
-    from skysh import __version__
 
     sky = SkySH.load() if sky is None else sky
     module = export_source(sky, "js", bands=None)

@@ -117,18 +117,8 @@ from numpy.typing import ArrayLike, NDArray
 from skysh.checks import as_float_array, check_range, short_repr
 from skysh.sh import basis as sh
 
-__all__ = [
-    "ENGINES",
-    "ENGINE_MAX_BANDS",
-    "ENGINE_FRAMES",
-    "EngineMap",
-    "engine_map",
-    "convert",
-    "snippet",
-    "SNIPPET_ZERO_BELOW",
-    "sun_direction",
-    "BASIS_CONSTANTS",
-]
+__all__ = ["ENGINES", "ENGINE_MAX_BANDS", "ENGINE_FRAMES", "EngineMap", "engine_map", "convert", "snippet",
+    "SNIPPET_ZERO_BELOW", "sun_direction"]
 
 ENGINES: tuple[str, ...] = (
     "threejs", "filament", "filament-irradiance", "unity", "unity-shader", "babylon", "unreal",

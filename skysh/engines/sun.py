@@ -45,7 +45,7 @@ from numpy.typing import ArrayLike, NDArray
 from skysh.checks import as_float_array, check_dirs, short_repr
 from skysh.engines import presets as engines
 
-__all__ = ["SUN_SCALES", "SUN_UNITS", "SunPreset", "sun_preset", "sun_snippet"]
+__all__ = ["SUN_UNITS", "sun_preset", "sun_snippet"]
 
 SUN_SCALES: dict[str, float] = {
     "threejs": 1.0, "filament": 1.0, "filament-irradiance": 1.0, "babylon": 1.0, "unreal": 1.0,

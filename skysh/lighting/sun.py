@@ -100,21 +100,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from skysh.checks import as_float_array, check_flag, check_range, check_size, short_repr
 
-__all__ = [
-    "LATITUDE_RANGE",
-    "LONGITUDE_RANGE",
-    "J2000",
-    "DAYS_PER_JULIAN_CENTURY",
-    "HORIZON_ZENITH",
-    "SunPosition",
-    "SolarEphemeris",
-    "position",
-    "position_unchecked",
-    "as_utc",
-    "ephemeris",
-    "compass_to_frame",
-    "frame_to_compass",
-]
+__all__ = ["LATITUDE_RANGE", "LONGITUDE_RANGE", "HORIZON_ZENITH", "position", "position_unchecked", "as_utc"]
 
 LATITUDE_RANGE: tuple[float, float] = (-90.0, 90.0)
 """Valid geographic latitude, degrees, positive North."""

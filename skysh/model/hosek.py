@@ -63,6 +63,7 @@ from functools import cache, lru_cache
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from skysh import options
 from skysh.checks import (
     as_float_array,
     check_bands,
@@ -78,13 +79,9 @@ from skysh.model import hosek_data, preetham, solar
 from skysh.model.ground import ground_sh
 from skysh.sh import basis as sh
 
-__all__ = [
-    "SUN_ZENITH_RANGE", "TURBIDITY_RANGE", "ALBEDO_RANGE", "DATASETS", "RGB_DATASET_COLOURSPACE", "PARAMETER_NAMES",
-    "BEZIER_BINOMIALS", "WAVELENGTHS", "LUMINOUS_EFFICACY", "HORIZON_OFFSET", "SKY_SH_THETA_NODES",
-    "QUADRATURE_SPLIT", "MAX_THETA_NODES", "HosekDataError", "bezier_weights", "configuration", "distribution",
-    "channel_radiance", "spectral_radiance", "spectral_to_xyz_weights", "tristimulus", "radiance", "luminance",
-    "luminance_row", "sky_quadrature_rule", "sky_sh", "horizontal_irradiance", "sky_minimum",
-]
+__all__ = ["PARAMETER_NAMES", "LUMINOUS_EFFICACY", "SKY_SH_THETA_NODES", "HosekDataError", "configuration",
+    "distribution", "channel_radiance", "spectral_radiance", "tristimulus", "radiance", "luminance", "luminance_row",
+    "sky_sh", "sky_minimum"]
 
 HosekDataError = hosek_data.HosekDataError
 
@@ -94,8 +91,8 @@ SUN_ZENITH_RANGE: tuple[float, float] = preetham.SUN_ZENITH_RANGE
 TURBIDITY_RANGE: tuple[float, float] = (1.0, 10.0)
 """Turbidities of the dataset (control points at 1, 2, ..., 10)."""
 
-ALBEDO_RANGE: tuple[float, float] = (0.0, 1.0)
-"""Ground albedo (control points at 0 and 1)."""
+ALBEDO_RANGE: tuple[float, float] = options.ALBEDO_RANGE
+"""The dataset's ground albedo, per channel: the runtime's ground albedo range (:data:`skysh.options.ALBEDO_RANGE`)."""
 
 DATASETS: tuple[str, ...] = ("auto", "rgb", "spectral")
 """``dataset`` choices: "rgb" (linear sRGB only), "spectral" (any colourspace), "auto" (rgb for sRGB)."""

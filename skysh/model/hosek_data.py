@@ -47,20 +47,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = [
-    "MITSUBA_VERSION",
-    "DRJIT_VERSION",
-    "EXTRA_HINT",
-    "DATASET_RELATIVE_PATH",
-    "PINNED_SHA256",
-    "SKY_TENSOR_SHAPES",
-    "WAVELENGTHS",
-    "HosekDataError",
-    "dataset_path",
-    "read_tensor_file",
-    "sky_tensors",
-    "dataset_info",
-]
+__all__ = ["HosekDataError", "dataset_path", "dataset_info"]
 
 MITSUBA_VERSION: str = "3.9.1"
 """The mitsuba release whose dataset file skysh reads (the ``hosek`` extra pins it)."""

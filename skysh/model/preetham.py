@@ -58,32 +58,10 @@ from skysh.checks import (
 from skysh.domain import SKY
 from skysh.sh import basis as sh
 
-__all__ = [
-    "SUN_ZENITH_RANGE",
-    "TURBIDITY_RANGE",
-    "PEREZ_Y",
-    "PEREZ_X",
-    "PEREZ_YC",
-    "ZENITH_X_MATRIX",
-    "ZENITH_Y_MATRIX",
-    "SKY_SH_THETA_NODES",
-    "perez",
-    "perez_coefficients",
-    "zenith_luminance",
-    "zenith_chromaticity",
-    "xyY",
-    "luminance",
-    "radiance",
-    "rgb_from_xyz_matrix",
-    "sky_quadrature_rule",
-    "sky_sh",
-    "sky_minimum",
-    "hemisphere_minimum",
-    "luminance_scale",
-    "zenith_luminance_unchecked",
-    "luminance_scale_unchecked",
-    "import_colour",
-]
+__all__ = ["SUN_ZENITH_RANGE", "TURBIDITY_RANGE", "PEREZ_Y", "PEREZ_X", "PEREZ_YC", "ZENITH_X_MATRIX",
+    "ZENITH_Y_MATRIX", "SKY_SH_THETA_NODES", "perez", "zenith_luminance", "luminance", "radiance",
+    "rgb_from_xyz_matrix", "sky_quadrature_rule", "sky_sh", "sky_minimum", "luminance_scale",
+    "zenith_luminance_unchecked", "luminance_scale_unchecked"]
 
 SUN_ZENITH_RANGE: tuple[float, float] = SKY.x.interval
 """Domain of the sun zenith angle, radians (the model is undefined below the horizon): the

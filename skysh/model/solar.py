@@ -106,18 +106,11 @@ from skysh.checks import as_float_array, check_bands, check_choice, check_cutoff
 from skysh.domain import SKY
 from skysh.sh import basis as sh
 
-__all__ = [
-    "SUN_ZENITH_RANGE", "TURBIDITY_RANGE", "SOLAR_WAVELENGTHS", "SOLAR_RADIANCE", "OZONE_WAVELENGTHS",
-    "OZONE_ABSORPTION", "MIXED_GAS_WAVELENGTHS", "MIXED_GAS_ABSORPTION", "WATER_VAPOUR_WAVELENGTHS",
-    "WATER_VAPOUR_ABSORPTION", "RAYLEIGH_COEFFICIENT", "RAYLEIGH_EXPONENT", "ANGSTROM_ALPHA",
-    "ANGSTROM_BETA_SLOPE", "ANGSTROM_BETA_INTERCEPT", "OZONE_THICKNESS", "PRECIPITABLE_WATER",
-    "KASTEN_COEFFICIENTS", "SUN_ANGULAR_RADIUS", "SUN_SOLID_ANGLE", "WAVELENGTHS", "LUMINOUS_EFFICACY",
-    "CMFS_NAME", "MAX_WINDOW_BANDS", "SEED_PUNCTUAL_WINDOW", "SUN_WINDOW_PARAMETERS", "SUN_WINDOWS",
-    "SUN_WINDOW_KINDS", "SUN_WINDOW_MARGIN", "relative_optical_mass", "angstrom_beta", "transmittance",
-    "spectral_radiance", "tristimulus", "luminance", "direct_normal_illuminance", "illuminance_xyz",
-    "illuminance_rgb", "extraterrestrial_xyz", "sun_direction", "sun_window", "sun_window_family",
-    "delta_irradiance_error", "delta_irradiance_minimum", "derive_sun_window", "sun_sh",
-]
+__all__ = ["KASTEN_COEFFICIENTS", "SUN_ANGULAR_RADIUS", "SUN_SOLID_ANGLE", "WAVELENGTHS", "CMFS_NAME",
+    "MAX_WINDOW_BANDS", "SEED_PUNCTUAL_WINDOW", "SUN_WINDOW_PARAMETERS", "SUN_WINDOWS", "relative_optical_mass",
+    "spectral_radiance", "luminance", "direct_normal_illuminance", "illuminance_xyz", "illuminance_rgb",
+    "extraterrestrial_xyz", "sun_direction", "sun_window", "delta_irradiance_error", "delta_irradiance_minimum",
+    "derive_sun_window", "sun_sh"]
 
 # --------------------------------------------------------------------------- #
 # Domain

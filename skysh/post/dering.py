@@ -47,11 +47,9 @@ from skysh.sh import basis as sh
 from skysh.sh import minimum as shmin
 from skysh.sh.minimum import exact_min
 
-__all__ = ["DeringWarning", "DERING_TARGETS", "DERING_METHODS", "MAX_DERING_BANDS", "SEED_WINDOW_SIZES",
-           "SEED_TABLE_1", "RADIANCE_WINDOW_SIZES", "DELTA_MARGIN", "CERTIFIED_MARGIN", "LINEAR_ATTENUATION",
-           "WINDOW_TABLE", "PUNCTUAL_WINDOW", "IRRADIANCE_KERNEL", "RADIANCE_KERNEL", "sinc4_window",
-           "delta_minimum", "linear_attenuation", "window_table", "exact_min", "dering",
-           "directional_light_sh"]
+__all__ = ["DeringWarning", "DERING_TARGETS", "SEED_WINDOW_SIZES", "SEED_TABLE_1", "DELTA_MARGIN",
+    "CERTIFIED_MARGIN", "LINEAR_ATTENUATION", "WINDOW_TABLE", "PUNCTUAL_WINDOW", "sinc4_window", "delta_minimum",
+    "linear_attenuation", "window_table", "exact_min", "dering"]
 
 
 class DeringWarning(UserWarning):

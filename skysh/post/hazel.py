@@ -47,25 +47,8 @@ from numpy.typing import ArrayLike, NDArray
 from skysh.checks import as_float_array, check_coeffs, check_dirs, check_size
 from skysh.sh import basis as sh
 
-__all__ = [
-    "L0_SCALE",
-    "L1_SCALE",
-    "L2_OFF_DIAGONAL_SCALE",
-    "L2_ZZ_SCALE",
-    "L2_XX_MINUS_YY_SCALE",
-    "RADIANCE_FACTORS",
-    "IRRADIANCE_FACTORS",
-    "ANTIPODAL_FACTOR",
-    "GEOMERICS_EXPONENT_ENDS",
-    "SYMMETRY_TOLERANCE",
-    "MAX_BANDS",
-    "to_normalised",
-    "from_normalised",
-    "radiance",
-    "irradiance",
-    "geomerics_parameters",
-    "irradiance_l1_nonlinear",
-]
+__all__ = ["L0_SCALE", "L1_SCALE", "L2_OFF_DIAGONAL_SCALE", "L2_ZZ_SCALE", "L2_XX_MINUS_YY_SCALE",
+    "ANTIPODAL_FACTOR", "GEOMERICS_EXPONENT_ENDS", "MAX_BANDS", "radiance", "irradiance", "irradiance_l1_nonlinear"]
 
 _SQRT_PI: float = math.sqrt(math.pi)
 

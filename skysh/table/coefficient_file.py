@@ -90,20 +90,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from skysh import files
+from skysh._version import __version__
 from skysh.checks import check_count
 from skysh.domain import SKY, SUN, TERM_ORDER
 from skysh.table import container, poly
 from skysh.table.container import CoefficientFileError
 from skysh.table.sun_table import SUN_BASIS, SUN_MAX_LN, SUN_UNITS, SUN_VARIABLES
-from skysh import __version__
 
-__all__ = [
-    "FORMAT", "FORMAT_VERSION", "RETIRED_VERSIONS", "DEFAULT_FILE_NAME", "MAX_FILE_BANDS", "MAX_FILE_DEGREE",
-    "MAX_TABLE_MAGNITUDE", "MAX_METADATA_BYTES", "MAX_MATRIX_ENTRY", "MAX_MEMBER_BYTES", "MAX_FILE_BYTES", "MEMBERS",
-    "REQUIRED_MEMBERS", "FILE_COLOURSPACES", "BASIS", "IRRADIANCE_BASIS", "DOMAIN", "HASH_KEY", "RUNTIME_FIELDS",
-    "TABLES", "CoefficientFileError", "TableSpec", "NamedTable", "SkyTable", "zonal_half_layout", "content_sha256",
-    "default_path", "read", "write",
-]
+__all__ = ["DEFAULT_FILE_NAME", "MAX_FILE_DEGREE", "MAX_TABLE_MAGNITUDE", "FILE_COLOURSPACES", "BASIS", "TABLES",
+    "CoefficientFileError", "NamedTable", "SkyTable", "zonal_half_layout", "default_path", "read", "write"]
 
 FORMAT: str = "skysh-coefficients"
 """Value of the ``format`` member of every coefficient file."""
@@ -284,6 +279,18 @@ def _check_arrays(table: Any, degrees: Any, names: tuple[str, str, str], groups:
     t_name, d_name, unit = names
     if not isinstance(table, np.ndarray) or table.dtype.kind != "f":
         raise CoefficientFileError(f"{t_name} must be a numpy array of floats, got {_describe(table)}")
+    _check_degrees(degrees, d_name, unit, groups)
+    top = degrees.max(axis=0)
+    n = degrees.shape[0]
+    expected = (poly.n_terms((int(top[0]), int(top[1]))), n * (n + 1) // 2, 3)
+    if table.shape != expected:
+        raise CoefficientFileError(f"{t_name} must have shape {expected} for {d_name} {degrees.tolist()}, got {table.shape}")
+    _check_values(table, t_name, max_magnitude, max_abs_sum, bound_name)
+    _check_layout_zeros(table, degrees, names)
+
+
+def _check_degrees(degrees: Any, d_name: str, unit: str, groups: tuple[int, int]) -> None:
+    """:func:`_check_arrays`' degrees: an integer array of shape (groups, 2), each in [0, :data:`MAX_FILE_DEGREE`]."""
     if not isinstance(degrees, np.ndarray) or degrees.dtype.kind not in "iu":
         raise CoefficientFileError(f"{d_name} must be a numpy array of integers, got {_describe(degrees)}")
     if degrees.ndim != 2 or degrees.shape[1] != 2 or not groups[0] <= degrees.shape[0] <= groups[1]:
@@ -291,11 +298,11 @@ def _check_arrays(table: Any, degrees: Any, names: tuple[str, str, str], groups:
             f"{d_name} must have shape ({unit}, 2) with {groups[0]} <= {unit} <= {groups[1]}, got {degrees.shape}")
     if degrees.min() < 0 or degrees.max() > MAX_FILE_DEGREE:
         raise CoefficientFileError(f"{d_name} must lie in [0, {MAX_FILE_DEGREE}], got {degrees.tolist()}")
-    top = degrees.max(axis=0)
-    n = degrees.shape[0]
-    expected = (poly.n_terms((int(top[0]), int(top[1]))), n * (n + 1) // 2, 3)
-    if table.shape != expected:
-        raise CoefficientFileError(f"{t_name} must have shape {expected} for {d_name} {degrees.tolist()}, got {table.shape}")
+
+
+def _check_values(table: NDArray[np.float64], t_name: str, max_magnitude: float, max_abs_sum: float | None,
+                  bound_name: str) -> None:
+    """:func:`_check_arrays`' values: finite, within ``max_magnitude`` and (if given) ``max_abs_sum`` per channel."""
     if not np.all(np.isfinite(table)):
         raise CoefficientFileError(f"{t_name} holds NaN or inf")
     largest = float(np.abs(table).max())
@@ -306,8 +313,13 @@ def _check_arrays(table: Any, degrees: Any, names: tuple[str, str, str], groups:
         raise CoefficientFileError(
             f"{t_name} sums |values| to {float(np.abs(table).sum(axis=0).max()):.3g} in a channel, above {max_abs_sum:g} "
             f"({bound_name}): its exponential could overflow")
-    # Layout promise: terms above a group's own degrees are zero in its rows.
-    i, j = np.divmod(np.arange(expected[0]), int(top[1]) + 1)
+
+
+def _check_layout_zeros(table: NDArray[np.float64], degrees: NDArray[np.int64], names: tuple[str, str, str]) -> None:
+    """:func:`_check_arrays`' layout promise (shapes checked): terms above a group's own degrees are zero in its rows."""
+    t_name, d_name, unit = names
+    n = degrees.shape[0]
+    i, j = np.divmod(np.arange(table.shape[0]), int(degrees.max(axis=0)[1]) + 1)
     for row, (l, _) in enumerate(zonal_half_layout(n)):
         if np.any(table[(i > degrees[l, 0]) | (j > degrees[l, 1]), row] != 0.0):
             raise CoefficientFileError(
@@ -332,15 +344,20 @@ def _check_block(spec: TableSpec, block: Any, named: NamedTable | None, coloursp
             raise CoefficientFileError(f"{where} {key} {block[key]!r} differs from {value!r}, which this skysh's runtime assumes")
     for key in spec.matrices:
         if key in block:
-            try:
-                matrix = np.array(block[key], dtype=np.float64)
-                ok = (matrix.shape == (3, 3) and all(type(v) in (int, float) for row in block[key] for v in row)
-                      and bool(np.all(np.abs(matrix) <= MAX_MATRIX_ENTRY)))
-            except (TypeError, ValueError):
-                ok = False
-            if not ok:
-                raise CoefficientFileError(f"{where} {key} must be a 3 x 3 list of numbers within +-{MAX_MATRIX_ENTRY:g}, got "
-                                           f"{block[key]!r}")
+            _check_matrix(where, key, block[key])
+
+
+def _check_matrix(where: str, key: str, value: Any) -> None:
+    """One matrix field of a metadata block: a 3 x 3 list of Python numbers within +-:data:`MAX_MATRIX_ENTRY`."""
+    try:
+        matrix = np.array(value, dtype=np.float64)
+        ok = (matrix.shape == (3, 3) and all(type(v) in (int, float) for row in value for v in row)
+              and bool(np.all(np.abs(matrix) <= MAX_MATRIX_ENTRY)))
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise CoefficientFileError(f"{where} {key} must be a 3 x 3 list of numbers within +-{MAX_MATRIX_ENTRY:g}, got "
+                                   f"{value!r}")
 
 
 def _check_runtime_metadata(metadata: dict[str, Any], sky: SkyTable, required: bool) -> None:
@@ -360,6 +377,11 @@ def _check_runtime_metadata(metadata: dict[str, Any], sky: SkyTable, required: b
         if key in metadata and not _same(metadata[key], value):
             raise CoefficientFileError(f"metadata {key} {metadata[key]!r} differs from {value!r}, which this skysh's runtime "
                                        "assumes")
+    _check_table_blocks(metadata, sky, required)
+
+
+def _check_table_blocks(metadata: dict[str, Any], sky: SkyTable, required: bool) -> None:
+    """The metadata's ``tables``: a JSON object with a block per table held (each :func:`_check_block`)."""
     blocks = metadata.get("tables", {})
     if not isinstance(blocks, dict):
         raise CoefficientFileError(f"metadata tables must be a JSON object, got {_describe(blocks)}")

@@ -35,8 +35,7 @@ import numpy as np
 from numpy.lib import format as npy_format
 from numpy.typing import NDArray
 
-__all__ = ["CoefficientFileError", "NPY_HEADER_MAX", "NOT_NPZ", "STORED", "DEFLATED", "Member", "zip_bytes", "encode",
-           "directory", "check_declared", "inflate", "payload", "array", "as_path", "read_bytes"]
+__all__ = ["CoefficientFileError", "array", "as_path"]
 
 
 class CoefficientFileError(ValueError):

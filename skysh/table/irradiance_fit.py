@@ -80,16 +80,11 @@ from skysh.sh import basis as sh
 from skysh.sh import minimum as shmin
 from skysh.table import fit
 
-__all__ = [
-    "Y00", "LOBE", "HALF_ROWS", "LIFT_MAP", "MU_MATRIX",
-    "METHODS", "TRUTH_BANDS", "TRUTH_THETA_NODES", "OPTIMISATION_NORMALS", "LP_EXPONENT", "BLEND_WEIGHT",
-    "CHROMA_FLOOR", "Objective", "RECOMMENDED", "quadratic_parts", "lifted_matrix", "sphere_minimum", "radiance_equivalent",
-    "true_irradiance", "half_sphere_normals", "constrained_coefficients", "constrained_point",
+__all__ = ["Y00", "LOBE", "OPTIMISATION_NORMALS", "LP_EXPONENT", "BLEND_WEIGHT", "CHROMA_FLOOR", "Objective",
+    "RECOMMENDED", "sphere_minimum", "true_irradiance", "constrained_coefficients", "constrained_point",
     "constrained_irradiance_grid", "fit_irradiance_table", "evaluate_irradiance_table", "FIT_ERROR_POINTS",
-    "NONNEG_POINTS", "HELD_OUT_SEED", "build_table",
-    "SOLVER_PACKAGES", "SOLVER_EXTRA", "SOLVER_INSTALL", "missing_solver_packages", "solver_available",
-    "solver_missing_message", "require_solver",
-]
+    "NONNEG_POINTS", "build_table", "SOLVER_EXTRA", "SOLVER_INSTALL", "missing_solver_packages", "solver_available",
+    "solver_missing_message"]
 
 # --------------------------------------------------------------------------- #
 # The solver: the tools extra, imported only by the functions that solve

@@ -46,10 +46,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from skysh.domain import KASTEN_COEFFICIENTS, SUN
 
-__all__ = [
-    "SUN_VARIABLES", "SUN_BASIS", "SUN_UNITS", "SUN_MAX_LN",
-    "air_mass", "sun_variables",
-]
+__all__ = ["SUN_VARIABLES", "SUN_BASIS", "SUN_MAX_LN", "air_mass", "sun_variables"]
 
 _A, _B, _C = KASTEN_COEFFICIENTS
 _T0, _T1 = SUN.y.interval

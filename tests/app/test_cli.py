@@ -334,9 +334,11 @@ class TestTools:
         self, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture
     ) -> None:
         monkeypatch.setattr(cli, "_tools_dir", lambda: None)
-        assert cli.main(["fit", "--quick"]) == 2
+        assert cli.main(["report", "--quick"]) == 2
         err = capsys.readouterr().err
         assert "source checkout" in err and err.count("\n") == 1
+        assert cli.main(["fit", "--help"]) == 0  # the fit is the package's: it runs without a checkout
+        assert "--out" in capsys.readouterr().out
 
 
 # --------------------------------------------------------------------------- #

@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import EPS, ROOT, chebyshev_variables, load_script, script_without_cvxpy
+from conftest import EPS, ROOT, chebyshev_variables, script_without_cvxpy
 from numpy.polynomial import chebyshev as npcheb
 
 from skysh.lighting.sunlight import SunLight
@@ -449,8 +449,10 @@ class TestSunFit:
 # --------------------------------------------------------------------------- #
 @pytest.fixture(scope="module")
 def fit_sky():
-    """tools/fit_sky.py as a module (its main(argv) is what `skysh fit` runs)."""
-    return load_script(ROOT / "tools" / "fit_sky.py", "fit_sky_under_test")
+    """skysh.app.fit_command (what `skysh fit` and tools/fit_sky.py run)."""
+    from skysh.app import fit_command
+
+    return fit_command
 
 
 def _with_shipped_irradiance(table: coefficient_file.SkyTable) -> coefficient_file.SkyTable:
