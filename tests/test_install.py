@@ -62,3 +62,24 @@ class TestInstalledWheel:
         package_file, data_file = result.stdout.split()
         assert str(ROOT) not in package_file, "skysh was imported from the source tree, not the wheel"
         assert Path(data_file).name == "preetham_sh.npz" and str(ROOT) not in data_file
+
+    def test_fit_runs_from_the_wheel(self, installed: Path, tmp_path: Path) -> None:
+        """Issue 24: ``skysh fit`` is the package's own command (the tools extra brings its solver)."""
+        result = subprocess.run([str(installed / "skysh"), "fit", "--help"], cwd=tmp_path, env=_clean_env(),
+                                capture_output=True, text=True)
+        assert result.returncode == 0 and "--out" in result.stdout, result.stderr
+        report = subprocess.run([str(installed / "skysh"), "report", "--out", str(tmp_path / "r")], cwd=tmp_path,
+                                env=_clean_env(), capture_output=True, text=True)
+        assert report.returncode == 2 and "source checkout" in report.stderr, report.stderr  # the report stays a tool
+
+    @pytest.mark.slow
+    def test_a_quick_fit_from_the_wheel(self, installed: Path, tmp_path: Path) -> None:
+        """A whole quick fit from the installed package, outside the checkout (cvxpy from the machine's packages)."""
+        pytest.importorskip("cvxpy", reason="the fit's irradiance table needs the tools extra: pip install -e \".[tools]\"")
+        out = tmp_path / "q.npz"
+        result = subprocess.run([str(installed / "skysh"), "fit", "--quick", "--no-progress", "--out", str(out)],
+                                cwd=tmp_path, env=_clean_env(), capture_output=True, text=True)
+        assert result.returncode == 0, result.stderr
+        check = subprocess.run([str(installed / "python"), "-c", f"from skysh import SkySH; SkySH.load({str(out)!r})"],
+                               cwd=tmp_path, env=_clean_env(), capture_output=True, text=True)
+        assert check.returncode == 0, check.stderr

@@ -46,9 +46,12 @@ class TestWheelContents:
         assert table.bands == 7 and "errors" in table.metadata
 
     def test_every_module_is_packaged(self, wheel: Path) -> None:
+        """Every module of every sub-package, the viewer's page and the exports' source files."""
         names = set(_names(wheel))
-        modules = {f"skysh/{p.name}" for p in (ROOT / "skysh").glob("*.py")}
-        assert modules <= names, sorted(modules - names)
+        shipped = [p for pattern in ("**/*.py", "app/web/*", "export/templates/*") for p in (ROOT / "skysh").glob(pattern)
+                   if "__pycache__" not in p.parts and p.is_file()]
+        files = {p.relative_to(ROOT).as_posix() for p in shipped}
+        assert len(files) > 50 and files <= names, sorted(files - names)
 
     def test_nothing_outside_the_package(self, wheel: Path) -> None:
         tops = {name.split("/")[0] for name in _names(wheel)}

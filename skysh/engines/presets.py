@@ -115,6 +115,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from skysh.checks import as_float_array, check_range, short_repr
+from skysh.literals import double_literal, suffixed_literal
 from skysh.sh import basis as sh
 
 __all__ = ["ENGINES", "ENGINE_MAX_BANDS", "ENGINE_FRAMES", "EngineMap", "engine_map", "convert", "snippet",
@@ -461,17 +462,6 @@ def _without_noise(values: NDArray[np.float64], coeffs: NDArray[np.float64], eng
     return np.where((np.abs(values) < zero) & ~constant, 0.0, values) + 0.0
 
 
-def _js(value: float) -> str:
-    """Shortest text that reads back as the same double (JavaScript number)."""
-    return repr(float(value))
-
-
-def _f32(value: float) -> str:
-    """The double's shortest round-trip text with the C++/C# float suffix (the compiler rounds it once)."""
-    text = repr(float(value))
-    return (text if any(ch in text for ch in ".e") else text + ".0") + "f"
-
-
 def _frame_note(engine: str) -> str:
     return {
         "threejs": "three.js's right-handed Y-up frame: +X = skysh +X (sun azimuth 0), +Y = zenith, -Z = skysh +Y",
@@ -483,7 +473,7 @@ def _frame_note(engine: str) -> str:
 
 
 def _snippet_threejs(v: NDArray, bands: int) -> str:
-    rows = ",\n".join("  " + ", ".join(_js(x) for x in row) for row in v)
+    rows = ",\n".join("  " + ", ".join(double_literal(x) for x in row) for row in v)
     return (
         f"// skysh sky lighting ({bands} bands) for three.js: SphericalHarmonics3 / LightProbe.\n"
         f"// Radiance SH (cd/m^2) without the Condon-Shortley phase, in {_frame_note('threejs')}.\n"
@@ -495,7 +485,7 @@ def _snippet_threejs(v: NDArray, bands: int) -> str:
 
 
 def _snippet_babylon(v: NDArray, bands: int) -> str:
-    rows = ",\n".join(f"  [{', '.join(_js(x) for x in row)}] /* {name} */" for name, row in zip(_BABYLON_ROWS, v))
+    rows = ",\n".join(f"  [{', '.join(double_literal(x) for x in row)}] /* {name} */" for name, row in zip(_BABYLON_ROWS, v))
     return (
         f"// skysh sky lighting ({bands} bands) for Babylon.js: SphericalHarmonics -> SphericalPolynomial.\n"
         f"// Harmonics of E/pi (A_l / pi times the radiance SH, cd/m^2), in {_frame_note('babylon')}.\n"
@@ -509,7 +499,7 @@ def _snippet_babylon(v: NDArray, bands: int) -> str:
 
 def _snippet_filament(v: NDArray, bands: int, irradiance: bool) -> str:
     name = "kSkyIrradianceSH" if irradiance else "kSkyRadianceSH"
-    rows = ",\n".join(f"    {{{', '.join(_f32(x) for x in row)}}}" for row in v)
+    rows = ",\n".join(f"    {{{', '.join(suffixed_literal(x) for x in row)}}}" for row in v)
     what = (
         "E/pi pre-multiplied by the basis constants (k_i A_l / pi, cd/m^2), as cmgen --sh-shader writes it"
         if irradiance else "radiance SH (cd/m^2) with the Condon-Shortley phase; Filament pre-scales it"
@@ -527,7 +517,7 @@ def _snippet_filament(v: NDArray, bands: int, irradiance: bool) -> str:
 
 
 def _snippet_unity(v: NDArray, bands: int) -> str:
-    lines = [f"skyProbe[{c}, {i}] = {_f32(v[c, i])};" for c in range(3) for i in range(9)]
+    lines = [f"skyProbe[{c}, {i}] = {suffixed_literal(v[c, i])};" for c in range(3) for i in range(9)]
     return (
         f"// skysh sky lighting ({bands} bands) for Unity: RenderSettings.ambientProbe (SphericalHarmonicsL2).\n"
         "// \"Unity format\": E/pi pre-multiplied by the basis constants (k_i A_l / pi, cd/m^2), sh[rgb, i],\n"
@@ -540,7 +530,7 @@ def _snippet_unity(v: NDArray, bands: int) -> str:
 
 def _snippet_unity_shader(v: NDArray, bands: int) -> str:
     lines = [
-        f'skyBlock.SetVector("{name}", new Vector4({", ".join(_f32(x) for x in row)}));'
+        f'skyBlock.SetVector("{name}", new Vector4({", ".join(suffixed_literal(x) for x in row)}));'
         for name, row in zip(_UNITY_ROWS, v)
     ]
     return (
@@ -555,7 +545,7 @@ def _snippet_unity_shader(v: NDArray, bands: int) -> str:
 
 
 def _snippet_unreal(v: NDArray, bands: int) -> str:
-    lines = [f"SkySH.{ch}.V[{i}] = {_f32(v[c, i])};" for c, ch in enumerate("RGB") for i in range(9)]
+    lines = [f"SkySH.{ch}.V[{i}] = {suffixed_literal(v[c, i])};" for c, ch in enumerate("RGB") for i in range(9)]
     return (
         f"// skysh sky lighting ({bands} bands) for Unreal Engine: FSHVectorRGB3 of the sky light.\n"
         f"// Radiance SH (cd/m^2) with the Condon-Shortley phase, in {_frame_note('unreal')}.\n"

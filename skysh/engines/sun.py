@@ -44,6 +44,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from skysh.checks import as_float_array, check_dirs, short_repr
 from skysh.engines import presets as engines
+from skysh.literals import double_literal, suffixed_literal
 
 __all__ = ["SUN_UNITS", "sun_preset", "sun_snippet"]
 
@@ -134,15 +135,6 @@ def _printed(values: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.where(np.abs(values) < engines.SNIPPET_ZERO_BELOW, 0.0, values) + 0.0
 
 
-def _js(v: float) -> str:
-    return repr(float(v))
-
-
-def _f32(v: float) -> str:
-    text = repr(float(v))
-    return (text if any(ch in text for ch in ".e") else text + ".0") + "f"
-
-
 def sun_snippet(direction: ArrayLike, rgb: ArrayLike, engine: str) -> str:
     """
     Paste-ready code that sets ``engine``'s directional light to the sun (:func:`sun_preset`).
@@ -153,6 +145,7 @@ def sun_snippet(direction: ArrayLike, rgb: ArrayLike, engine: str) -> str:
     refusals as :func:`sun_preset`.
     """
     p = sun_preset(direction, rgb, engine)
+    js, f32 = double_literal, suffixed_literal  # JavaScript numbers; C++ and C# floats
     r, g, b = _printed(p.colour)
     (x, y, z), (tx, ty, tz) = _printed(p.direction), _printed(p.travel)
     unit = SUN_UNITS[engine]
@@ -161,16 +154,16 @@ def sun_snippet(direction: ArrayLike, rgb: ArrayLike, engine: str) -> str:
             f"// The sun (skysh): colour x intensity = its illuminance, {unit} (BRDF_Lambert divides by pi, as for\n"
             "// the probe); linear sRGB; position = towards the sun, target at the origin.\n"
             "import { Color, DirectionalLight } from 'three';\n\n"
-            f"const sunLight = new DirectionalLight(new Color({_js(r)}, {_js(g)}, {_js(b)}), {_js(p.intensity)});\n"
-            f"sunLight.position.set({_js(x)}, {_js(y)}, {_js(z)}); // then scene.add(sunLight, sunLight.target);\n"
+            f"const sunLight = new DirectionalLight(new Color({js(r)}, {js(g)}, {js(b)}), {js(p.intensity)});\n"
+            f"sunLight.position.set({js(x)}, {js(y)}, {js(z)}); // then scene.add(sunLight, sunLight.target);\n"
         )
     if engine == "babylon":
         return (
             f"// The sun (skysh): diffuse x intensity = its illuminance, {unit} (a directional light's automatic\n"
             "// intensity mode; the PBR diffuse divides by pi); linear sRGB; direction = where the light travels.\n"
             "import { Color3, DirectionalLight, Vector3 } from '@babylonjs/core';\n\n"
-            f"const sunLight = new DirectionalLight('sun', new Vector3({_js(tx)}, {_js(ty)}, {_js(tz)}), scene);\n"
-            f"sunLight.diffuse = new Color3({_js(r)}, {_js(g)}, {_js(b)});\nsunLight.intensity = {_js(p.intensity)};\n"
+            f"const sunLight = new DirectionalLight('sun', new Vector3({js(tx)}, {js(ty)}, {js(tz)}), scene);\n"
+            f"sunLight.diffuse = new Color3({js(r)}, {js(g)}, {js(b)});\nsunLight.intensity = {js(p.intensity)};\n"
         )
     if engine.startswith("filament"):
         return (
@@ -178,23 +171,23 @@ def sun_snippet(direction: ArrayLike, rgb: ArrayLike, engine: str) -> str:
             "// where the light travels. engine: your filament::Engine*; add sunEntity to the scene.\n"
             "utils::Entity sunEntity = utils::EntityManager::get().create();\n"
             "filament::LightManager::Builder(filament::LightManager::Type::SUN)\n"
-            f"        .color({{{_f32(r)}, {_f32(g)}, {_f32(b)}}})\n        .intensity({_f32(p.intensity)})\n"
-            f"        .direction({{{_f32(tx)}, {_f32(ty)}, {_f32(tz)}}})\n        .build(*engine, sunEntity);\n"
+            f"        .color({{{f32(r)}, {f32(g)}, {f32(b)}}})\n        .intensity({f32(p.intensity)})\n"
+            f"        .direction({{{f32(tx)}, {f32(ty)}, {f32(tz)}}})\n        .build(*engine, sunEntity);\n"
         )
     if engine.startswith("unity"):
         return (
             f"// The sun (skysh), built-in and URP: color.linear x intensity = E/pi ({unit}), as ShadeSH9's sky;\n"
             "// HDRP: intensity in lux, x Mathf.PI. sunLight: your directional Light.\n"
             "UnityEngine.Rendering.GraphicsSettings.lightsUseLinearIntensity = true; // URP sets it in linear space\n"
-            f"sunLight.color = new Color({_f32(r)}, {_f32(g)}, {_f32(b)}).gamma; // Unity uses color.linear\n"
-            f"sunLight.intensity = {_f32(p.intensity)};\n"
-            f"sunLight.transform.rotation = Quaternion.LookRotation(new Vector3({_f32(tx)}, {_f32(ty)}, {_f32(tz)}));\n"
+            f"sunLight.color = new Color({f32(r)}, {f32(g)}, {f32(b)}).gamma; // Unity uses color.linear\n"
+            f"sunLight.intensity = {f32(p.intensity)};\n"
+            f"sunLight.transform.rotation = Quaternion.LookRotation(new Vector3({f32(tx)}, {f32(ty)}, {f32(tz)}));\n"
         )
     return (
         f"// The sun (skysh): Intensity in {unit} (Diffuse_Lambert divides by pi); the colour is stored as 8-bit\n"
         "// sRGB (SetLightColor); the light travels along its X axis. SunComponent: your UDirectionalLightComponent*;\n"
         "// with a SkyAtmosphere, SunComponent->SetAtmosphereSunLight(false): this illuminance is already attenuated.\n"
-        f"SunComponent->SetLightColor(FLinearColor({_f32(r)}, {_f32(g)}, {_f32(b)}));\n"
-        f"SunComponent->SetIntensity({_f32(p.intensity)});\n"
-        f"SunComponent->SetWorldRotation(FVector({_f32(tx)}, {_f32(ty)}, {_f32(tz)}).Rotation());\n"
+        f"SunComponent->SetLightColor(FLinearColor({f32(r)}, {f32(g)}, {f32(b)}));\n"
+        f"SunComponent->SetIntensity({f32(p.intensity)});\n"
+        f"SunComponent->SetWorldRotation(FVector({f32(tx)}, {f32(ty)}, {f32(tz)}).Rotation());\n"
     )

@@ -5,35 +5,45 @@ The JavaScript and JSON exports
 -   :func:`module_source`: a self-contained ES module (no dependencies, double
     precision) with the fitted tables and ``coefficients(sunZenith, turbidity,
     sunAzimuth = 0, options = {})``, the per-frame runtime for browser day-night
-    cycles (``export.export_source(sky, "js")`` calls it).
+    cycles (``export.export_source(sky, "js")`` calls it), and ``sunLight``, ``engineLayout``.
 -   :func:`declarations`, :func:`declarations_path`: the TypeScript declarations of that
     module and the file name TypeScript finds them under (``sky_sh.d.mts`` beside ``sky_sh.mjs``).
 -   :func:`json_source`: the tables and the algorithm in words, for any other language.
+-   :data:`MODULE_TEMPLATE`, :data:`DECLARATIONS_TEMPLATE`, :data:`JSON_TEMPLATE`: their source files.
 
-Both are written from :func:`skysh.export.tables.export_tables` and, for the engines,
-:func:`skysh.export.tables.engine_plan` (the numbers every export shares).
+The module and its declarations are real source files, ``skysh/export/templates/js_module.mjs``
+and ``js_module.d.mts`` (:mod:`skysh.export.template`): every statement is fixed text there,
+checked as it stands by ``tests/export/test_js_template.py`` (node, tsc). Python fills in the
+header's words and ONE data object, ``DATA``: the numbers of
+:func:`skysh.export.tables.export_tables` (the sky's table, the certified irradiance table, the
+sun's and the ground's tables), the 3-band deringing's constants (:mod:`skysh.post.dering`,
+:mod:`skysh.sh.minimum`) and, for every engine and band count it takes, its
+:func:`skysh.export.tables.engine_plan` as a sparse index-and-factor table that one loop reads.
+Every number is written by :func:`skysh.literals.double_literal` (the shortest text that reads
+back as the same double). The JSON export fills the fixed text of ``js_export.json`` with the
+same numbers and writes it with :mod:`json`.
 
-The module computes what :mod:`skysh.export.c_like` documents step by step (the
-runtime's algorithm, Habel 2008 eqs. 1, 4, 5) with everything static prepared
-at load: the table holds every band the export was asked for (``bands`` is a
+The module computes the runtime's algorithm (:meth:`skysh.SkySH.coefficients`: Habel 2008
+eqs. 1, 4, 5, then the deringing, the sun and the ground, the per-band factor or the engine's
+map), with everything static prepared at load: the table holds every band the export was asked for (``bands`` is a
 run-time option), the Gibbs and clamped-cosine factors of every band count, and
 for every engine and band count it takes, the folded per-band factors and the
-rest of the map as straight-line code. A call validates, fills preallocated
-scratch arrays and allocates its result only (or none, given ``out``).
+rest of the map. A call validates, fills preallocated scratch arrays and allocates
+its result only (or none, given ``out``).
 
 Options follow the Python runtime's defaults by intent: ``gibbs`` defaults to
 ``!irradiance`` and ``dering`` to ``irradiance``; ``irradianceTable`` (the runtime's
-``irradiance_table``, :func:`skysh.export.js_parts.js_irradiance`) takes the certified
-3-band irradiance table for diffuse light unless ``gibbs: true`` or ``dering: false``
-is asked for, ``false`` gives the filtered, deringed sky. An engine implies the
-diffuse intent (engines light with SH diffusely), so it defaults like irradiance
-(the table's radiance-equivalent at 3 bands) and refuses ``irradiance: true`` (its
+``irradiance_table``) takes the certified 3-band irradiance table for diffuse light unless
+``gibbs: true`` or ``dering: false`` is asked for, ``false`` gives the filtered, deringed sky.
+An engine implies the diffuse intent (engines light with SH diffusely), so it defaults like
+irradiance (the table's radiance-equivalent at 3 bands) and refuses ``irradiance: true`` (its
 map already applies the engine's scaling).
 
 References
 ----------
 -   Habel, R., Mustata, B., Wimmer, M. (2008), seed 004: eqs. (1), (4), (5).
 -   Preetham, A. J., Shirley, P., Smits, B. (1999), appendix.
+-   Sloan, P.-P. (2017). Deringing Spherical Harmonics (seed 000).
 """
 
 from __future__ import annotations
@@ -41,374 +51,71 @@ from __future__ import annotations
 import json
 import textwrap
 from pathlib import Path
-from string import Template
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from skysh import runtime
+from skysh._version import __version__
 from skysh.checks import interval_text
-from skysh.export.js_parts import DECLARATIONS, irradiance_json, js_dering, js_irradiance, js_lights, lights_json
-from skysh.export.lights import ZENITH_CONSTANTS, double_literal, text_rows
+from skysh.export import template
+from skysh.export.lights import light_flags
 from skysh.export.tables import EnginePlan, ExportTables, engine_plan, export_tables
-from skysh.model.preetham import PEREZ_Y
-from skysh import __version__
+from skysh.literals import double_literal, number_rows
+from skysh.model.preetham import PEREZ_Y, ZENITH_LUMINANCE
+from skysh.post import dering
+from skysh.sh import basis as sh
+from skysh.sh import minimum as shmin
 
 __all__ = ["module_source", "declarations", "declarations_path", "json_source"]
 
-_HEADER: str = '''\
-/**
- * skysh $version: SH lighting of the Preetham sky (Habel et al. 2008) for the browser and node.
- * Generated by `skysh export --format js$options`; do not edit. A self-contained ES module,
- * double precision; TypeScript declarations in the .d.mts written beside it.
- *
- *   import { coefficients } from "./sky_sh.mjs";
- *   const sh = coefficients(sunZenith, turbidity, sunAzimuth, { irradiance: true });
- *
- * coefficients(sunZenith, turbidity, sunAzimuth = 0, options = {}) returns an array of
- * bands * bands * 3 numbers: coefficient i = l (l + 1) + m, then R, G, B (index 3 i + c).
- * Angles in radians: sun zenith $sun_zenith_domain, any finite azimuth (from +X towards +Y);
- * turbidity $turbidity_domain. Frame: Z up. Real orthonormal SH with the Condon-Shortley phase.
- * Linear sRGB, cd/m^2 (irradiance: cd/m^2 x sr, lux for the luminance). Same numbers as
- * skysh.SkySH.coefficients(sun_zenith, turbidity, sun_azimuth, bands, gibbs, dering, irradiance,
- * sun=..., ground_albedo=..., irradiance_table=...). sunLight(sunZenith, turbidity, sunAzimuth = 0)
- * returns the sun as a directional light, { direction: [x, y, z] towards it, rgb: lux }, as
- * skysh.SkySH.sun_light.
- *
- * options (a plain object, e.g. { irradiance: true }; not an array or a class instance; all optional):
- *   bands       1 .. $max_bands (default $default_bands).
- *   irradiance  false (default): radiance; true: irradiance (clamped-cosine convolution).
- *   gibbs       the zonal sinc filter (Habel eq. 5); default !irradiance, and false with an engine
- *               or the irradiance table.
- *   dering      window so the irradiance is never negative (Sloan 2017); default irradiance (or an
- *               engine) where this module carries deringing (bands: $dering_bands); never with the table.
- *   irradianceTable  the certified 3-band irradiance table (docs/irradiance.md: never negative, no
- *               deringing search) in place of the sky's rows: null (default) by intent, for irradiance
- *               or an engine at 3 bands unless gibbs is true or dering false; false: never (the
- *               filtered, deringed sky); true: always (radiance: its E_lm / A_l), refused with gibbs: true.
- *   sun         true: add the sun's disk, a delta windowed to a non-negative irradiance; default false.
- *   groundAlbedo a number or [r, g, b] in [0, 1]: a Lambertian ground lit by the sky (and sun); default 0.
- *   engine      the numbers the API of that engine takes: $engine_list
- *               (skysh.engines.presets.convert of the radiance), flattened row-major, length from
- *               engineLayout(engine, bands); irradiance must then be false (the engine map
- *               applies the engine's own scaling). Defaults as for irradiance: engines light diffusely.
- *   out         an Array or Float64Array of the result's length to fill and return instead of a
- *               new Array (no allocation per frame).
- * Throws a RangeError naming the parameter for a value outside its domain, NaN or infinity
- * (and an unknown engine, listing the valid ones), a TypeError for a wrong type or option name.
- */
-'''
+MODULE_TEMPLATE: str = "js_module.mjs"
+"""The ES module's source (:data:`skysh.export.template.TEMPLATE_DIR`): fixed code, header words and ``{{DATA}}``."""
 
-_MODULE = Template('''\
-$header
-const MAX_BANDS = $max_bands;
-const DEFAULT_BANDS = $default_bands;
-const DX = $dx; // Chebyshev degree in x (sun zenith)
-const DY = $dy; // Chebyshev degree in y (log turbidity)
-const HALF3 = $half3; // 3 x table rows: stored (m >= 0) coefficients of MAX_BANDS bands (one band: and c_10)
-const TERMS = (DX + 1) * (DY + 1);
-const X_SCALE = $x_scale, X_SHIFT = $x_shift, Y_SCALE = $y_scale, Y_SHIFT = $y_shift;
-const ZMIN = $zmin, ZMAX = $zmax, TMIN = $tmin, TMAX = $tmax;
-const TWO_PI = $two_pi;
+DECLARATIONS_TEMPLATE: str = "js_module.d.mts"
+"""The TypeScript declarations' source: its words (version, bands, engine names, turbidity domain) are holes."""
 
-// TABLE[3 (r TERMS + i (DY + 1) + j) + c]: coefficient of T_i(x) T_j(y) for stored coefficient r
-// (l = 0, 1, 1, 2, 2, 2, ... with m = 0 .. l) and channel c (R, G, B): the terms of one stored
-// coefficient are contiguous, so its RGB is three dot products in one pass.
-const TABLE = new Float64Array([
-  $table
-]);
-// GIBBS[n (n - 1) / 2 + l] = sinc(pi l / n) (Habel eq. 5); LOBE[l] = A_l (clamped cosine).
-const GIBBS = new Float64Array([$gibbs]);
-const LOBE = new Float64Array([$lobe]);
-// Perez A..E of luminance as (slope, intercept) in turbidity (Preetham 1999).
-const PEREZ_Y = new Float64Array([$perez]);
+JSON_TEMPLATE: str = "js_export.json"
+"""The JSON export's fixed text (layouts, the algorithm in words), its numbers ``null`` until filled."""
 
-// Engines: band = per-band factor folded before the rotation, apply = the rest of the
-// engine's linear map (skysh.export.tables.engine_plan), from radiance r into o.
-const ENGINE_PLANS = new Map([
-$engines
-]);
+DERING_BANDS: int = 3
+"""The band count the module derings (the runtime's deringing as exact code: 3 bands only)."""
 
-// Scratch space, allocated once: a call allocates its result only.
-const TX = new Float64Array(DX + 1);
-const TY = new Float64Array(DY + 1);
-const W = new Float64Array(TERMS); // T_i(x) T_j(y)
-const ACC = new Float64Array(HALF3);
-const RADIANCE = new Float64Array(MAX_BANDS * MAX_BANDS * 3);
-const COS = new Float64Array(MAX_BANDS);
-const SIN = new Float64Array(MAX_BANDS);
-const C10 = new Float64Array(3); // the unfiltered sky's c_10 (the ground's E_h), apart from the table's rows
-const OPTIONS = new Set(["bands", "gibbs", "irradiance", "dering", "irradianceTable", "sun", "groundAlbedo", "engine", "out"]);
-$dering_defs$lights$irradiance
-/** skysh's version that wrote this module. */
-export const SKYSH_VERSION = $version;
-/** Largest band count this module evaluates. */
-export { MAX_BANDS };
-/** Engine names the engine option takes. */
-export const ENGINES = Object.freeze([$engine_names]);
-/** Fitted domain: sun zenith [min, max] in radians and turbidity [min, max]. */
-export const SUN_ZENITH_DOMAIN = Object.freeze([ZMIN, ZMAX]);
-export const TURBIDITY_DOMAIN = Object.freeze([TMIN, TMAX]);
+_PER_LINE: int = 6
+"""Numbers per line of an array in the data object."""
 
-function describe(value) {
-  return typeof value === "string" ? JSON.stringify(value) : String(value);
-}
 
-function number(value, name) {
-  if (typeof value !== "number") throw new TypeError(`$${name} must be a number, got $${describe(value)}`);
-  return value;
-}
+def _number(value: Any) -> str:
+    """An integer as written, any other real as :func:`double_literal`."""
+    return str(int(value)) if isinstance(value, (int, np.integer)) else double_literal(value)
 
-function flag(value, name, fallback) {
-  if (value === undefined) return fallback;
-  if (typeof value !== "boolean") throw new TypeError(`$${name} must be true or false, got $${describe(value)}`);
-  return value;
-}
 
-/** Refuse a frame outside the fitted domain, naming the parameter. */
-function checkFrame(sunZenith, turbidity, sunAzimuth) {
-  if (!(number(sunZenith, "sunZenith") >= ZMIN && sunZenith <= ZMAX)) {
-    throw new RangeError(`sunZenith must lie in [$${ZMIN}, $${ZMAX}] rad (the fitted domain), got $${sunZenith}`);
-  }
-  if (!(number(turbidity, "turbidity") >= TMIN && turbidity <= TMAX)) {
-    throw new RangeError(`turbidity must lie in [$${TMIN}, $${TMAX}] (the fitted domain), got $${turbidity}`);
-  }
-  if (!Number.isFinite(number(sunAzimuth, "sunAzimuth"))) {
-    throw new RangeError(`sunAzimuth must be finite (radians), got $${sunAzimuth}`);
-  }
-}
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
 
-function enginePlans(engine) {
-  const plans = ENGINE_PLANS.get(engine);
-  if (plans === undefined) {
-    throw new RangeError(`engine must be one of $${ENGINES.map((e) => JSON.stringify(e)).join(", ")}, got $${describe(engine)}`);
-  }
-  return plans;
-}
 
-function checkBands(bands, plans, engine) {
-  const high = plans === null ? MAX_BANDS : plans.length - 1;
-  if (!Number.isInteger(bands) || bands < 1 || bands > high || (plans !== null && plans[bands] === null)) {
-    const which = plans === null ? "" : ` for engine $${JSON.stringify(engine)} (the bands it takes: $${plans.map((p, n) => (p ? n : 0)).filter((n) => n).join(", ")})`;
-    throw new RangeError(`bands must be an integer in [1, $${high}]$${which}, got $${describe(bands)}`);
-  }
-  return bands;
-}
+def _data_text(value: Any, indent: str = "") -> str:
+    """
+    ``value`` as the text of a JSON value (also a JavaScript literal), objects one key a line.
 
-/** Y_z / F_Y(0, ts): the sky's luminance scale, cd/m^2 (Preetham 1999, appendix). */
-function luminanceScale(ts, t) {
-  const chi = ($c4_9 - t / 120.0) * (Math.PI - 2.0 * ts);
-  const yz = 1000.0 * (($c40453 * t - $c49710) * Math.tan(chi) - $c02155 * t + $c24192);
-  const ct = Math.cos(ts);
-  const f = (1.0 + (PEREZ_Y[0] * t + PEREZ_Y[1]) * Math.exp(PEREZ_Y[2] * t + PEREZ_Y[3]))
-    * (1.0 + (PEREZ_Y[4] * t + PEREZ_Y[5]) * Math.exp((PEREZ_Y[6] * t + PEREZ_Y[7]) * ts)
-      + (PEREZ_Y[8] * t + PEREZ_Y[9]) * ct * ct);
-  return yz / f;
-}
-
-/** Chebyshev T_0, T_1, ... at x and at y, each clamped to [-1, 1], into the whole of tx and ty. */
-function chebyshev(x, y, tx, ty) {
-  x = x < -1.0 ? -1.0 : x > 1.0 ? 1.0 : x;
-  y = y < -1.0 ? -1.0 : y > 1.0 ? 1.0 : y;
-  tx[0] = 1.0;
-  ty[0] = 1.0;
-  for (let i = 1; i < tx.length; i++) tx[i] = i === 1 ? x : 2.0 * x * tx[i - 1] - tx[i - 2];
-  for (let j = 1; j < ty.length; j++) ty[j] = j === 1 ? y : 2.0 * y * ty[j - 1] - ty[j - 2];
-}
-
-/** Habel eq. (1) at the frame's W: the first h3 / 3 rows of the table rows (laid out as TABLE) into ACC. */
-function rowSums(rows, h3) {
-  for (let k = 0, b = 0; k < h3; k += 3) { // six independent sums (latency)
-    let r0 = 0.0, g0 = 0.0, b0 = 0.0, r1 = 0.0, g1 = 0.0, b1 = 0.0, q = 0;
-    for (; q + 1 < TERMS; q += 2, b += 6) {
-      const w0 = W[q], w1 = W[q + 1];
-      r0 += w0 * rows[b];
-      g0 += w0 * rows[b + 1];
-      b0 += w0 * rows[b + 2];
-      r1 += w1 * rows[b + 3];
-      g1 += w1 * rows[b + 4];
-      b1 += w1 * rows[b + 5];
-    }
-    if (q < TERMS) {
-      const w0 = W[q];
-      r0 += w0 * rows[b];
-      g0 += w0 * rows[b + 1];
-      b0 += w0 * rows[b + 2];
-      b += 3;
-    }
-    ACC[k] = r0 + r1;
-    ACC[k + 1] = g0 + g1;
-    ACC[k + 2] = b0 + b1;
-  }
-}
-
-/** Radiance coefficients of n bands into o (coefficient-major RGB), band l times factor[l]; returns the
- * luminance scale. The rows from TABLE, or with table the certified IRRADIANCE's; C10 the sky's c_10. */
-function evaluate(ts, t, phi, n, gibbs, factor, o, table) {
-  chebyshev(ts * X_SCALE - X_SHIFT, Math.log(t) * Y_SCALE - Y_SHIFT, TX, TY);
-  for (let i = 0, q = 0; i <= DX; i++) {
-    const xi = TX[i];
-    for (let j = 0; j <= DY; j++, q++) W[q] = xi * TY[j];
-  }
-  rowSums(TABLE, n > 1 && !table ? ((n * (n + 1)) / 2) * 3 : 6); // one band or the table: row 1 too (c_10)
-  C10[0] = ACC[3];
-  C10[1] = ACC[4];
-  C10[2] = ACC[5];
-  if (table) rowSums(IRRADIANCE, 18); // 3 bands: the table's 6 rows in place of the sky's
-  const scale = luminanceScale(ts, t);
-  const c1 = Math.cos(phi), s1 = Math.sin(phi);
-  COS[0] = 1.0;
-  SIN[0] = 0.0;
-  for (let m = 1; m < n; m++) { // angle addition
-    COS[m] = COS[m - 1] * c1 - SIN[m - 1] * s1;
-    SIN[m] = SIN[m - 1] * c1 + COS[m - 1] * s1;
-  }
-  const g = (n * (n - 1)) / 2;
-  for (let l = 0; l < n; l++) {
-    const band = factor === null ? scale : scale * factor[l];
-    const row = ((l * (l + 1)) / 2) * 3;
-    const centre = l * (l + 1) * 3;
-    const zonal = gibbs ? band * GIBBS[g + l] : band;
-    o[centre] = ACC[row] * zonal;
-    o[centre + 1] = ACC[row + 1] * zonal;
-    o[centre + 2] = ACC[row + 2] * zonal;
-    for (let k = 1; k <= l; k++) { // Habel eq. (4): m = +k takes cos(k phi), m = -k sin(k phi)
-      const src = row + 3 * k, plus = centre + 3 * k, minus = centre - 3 * k;
-      const cp = COS[k] * band, sp = SIN[k] * band;
-      o[plus] = ACC[src] * cp;
-      o[plus + 1] = ACC[src + 1] * cp;
-      o[plus + 2] = ACC[src + 2] * cp;
-      o[minus] = ACC[src] * sp;
-      o[minus + 1] = ACC[src + 1] * sp;
-      o[minus + 2] = ACC[src + 2] * sp;
-    }
-  }
-  return scale;
-}
-
-/** Multiply band l of the n-band coefficients o by factor[l]. */
-function scaleBands(o, n, factor) {
-  for (let l = 0; l < n; l++) {
-    const f = factor[l];
-    for (let k = l * l * 3; k < (l + 1) * (l + 1) * 3; k++) o[k] *= f;
-  }
-}
-
-/**
- * The sky's SH coefficients for one frame (see the header). Throws a RangeError naming
- * the parameter for a value outside its domain, NaN or infinity, a TypeError for a
- * value of the wrong type or an unknown option.
- */
-export function coefficients(sunZenith, turbidity, sunAzimuth = 0, options = {}) {
-  checkFrame(sunZenith, turbidity, sunAzimuth);
-  const proto = options === null || typeof options !== "object" ? undefined : Object.getPrototypeOf(options);
-  if (proto === undefined || (proto !== null && Object.getPrototypeOf(proto) !== null)) { // a plain object only
-    const what = Array.isArray(options) ? "an array" : proto === undefined ? describe(options) : `an instance of $${proto.constructor?.name ?? "a class"}`;
-    throw new TypeError(`options must be a plain object ({ bands, irradiance, ... }), got $${what}`);
-  }
-  for (const key in options) {
-    if (!OPTIONS.has(key)) throw new TypeError(`unknown option $${JSON.stringify(key)}; the options are $${[...OPTIONS].join(", ")}`);
-  }
-  const engine = options.engine ?? null;
-  const plans = engine === null ? null : enginePlans(engine);
-  const bands = checkBands(options.bands ?? DEFAULT_BANDS, plans, engine);
-  const irradiance = flag(options.irradiance, "irradiance", false);
-  if (irradiance && plans !== null) {
-    throw new RangeError("irradiance must be false with an engine: the engine map takes radiance and applies the engine's own scaling");
-  }
-  const diffuse = irradiance || plans !== null; // the intent: diffuse lighting
-  const gibbsGiven = flag(options.gibbs, "gibbs", null), deringGiven = flag(options.dering, "dering", null);
-  const table = useTable(options.irradianceTable ?? null, bands, diffuse, gibbsGiven, deringGiven);
-  const gibbs = gibbsGiven ?? !(diffuse || table);
-  const dering = !table && (deringGiven ?? (diffuse && DERING_BANDS.includes(bands))); // the table: never
-  if (dering && !DERING_BANDS.includes(bands)) {
-    throw new RangeError(`dering is available for bands $${DERING_BANDS.join(", ") || "(none in this module)"}, got bands $${bands}`);
-  }
-  const sun = flag(options.sun, "sun", false);
-  if (sun && (LIGHTS & 1) === 0) throw new RangeError("sun needs the coefficient file's sun table: this module has none");
-  const albedo = albedoOption(options.groundAlbedo);
-  const post = dering || sun || albedo !== null; // the per-band factor then follows the dering and the lights
-  const plan = plans === null ? null : plans[bands];
-  const count = plan === null ? bands * bands * 3 : plan.count;
-  let out = options.out;
-  if (out === undefined) {
-    out = new Array(count); // a plain array: a small Float64Array costs more to allocate than the sky
-  } else if (!(Array.isArray(out) || out instanceof Float64Array) || out.length !== count) {
-    throw new TypeError(`out must be an Array or Float64Array of length $${count}, got $${describe(out)}`);
-  }
-  const phi = sunAzimuth % TWO_PI; // exact, as the Python runtime's math.fmod
-  const factor = plan !== null ? plan.band : irradiance ? LOBE : null;
-  const scale = evaluate(sunZenith, turbidity, phi, bands, gibbs, post ? null : factor, RADIANCE, table);
-  if (dering) deringInPlace(RADIANCE, bands);
-  if (sun || albedo !== null) addLights(sunZenith, turbidity, bands, gibbs, sun, albedo, scale, RADIANCE);
-  if (post && factor !== null) scaleBands(RADIANCE, bands, factor);
-  if (plan !== null) {
-    plan.apply(RADIANCE, out);
-  } else {
-    for (let k = 0; k < count; k++) out[k] = RADIANCE[k];
-  }
-  return out;
-}
-
-/** The engine's array shape (row-major) and the labels of its rows, for `bands` bands. */
-export function engineLayout(engine, bands = DEFAULT_BANDS) {
-  const plans = enginePlans(engine);
-  const plan = plans[checkBands(bands, plans, engine)];
-  return { shape: plan.shape, labels: plan.labels };
-}
-''')
-
-def json_source(tables: ExportTables, plan: EnginePlan | None = None) -> str:
-    """The JSON export: float64 tables, constants and the algorithm in words (and ``plan``, if given)."""
-    payload: dict[str, Any] = {
-        "format": "skysh-export",
-        "skysh_version": __version__,
-        "bands": tables.bands,
-        "degrees": list(tables.degrees),
-        "table": tables.table.tolist(),
-        "table_layout": "[i][j][r][c]: coefficient of T_i(x) T_j(y) for stored coefficient r "
-        "(half_layout[r] = (l, m), m >= 0) and channel c (R, G, B); float64",
-        "half_layout": [list(lm) for lm in tables.half_layout],
-        "gibbs": tables.gibbs.tolist(),
-        "lobe": tables.lobe.tolist(),
-        "x": {"scale": tables.x_scale, "shift": tables.x_shift, "of": "sun_zenith (rad)"},
-        "y": {"scale": tables.y_scale, "shift": tables.y_shift, "of": "log(turbidity)"},
-        "domain": {"sun_zenith": list(tables.sun_zenith_domain), "turbidity": list(tables.turbidity_domain)},
-        "perez_Y": PEREZ_Y.tolist(),
-        "luminance_scale": "Y_z / F_Y(0, ts) with Y_z = 1000 ((4.0453 T - 4.9710) tan chi - 0.2155 T + 2.4192), "
-        "chi = (4/9 - T/120)(pi - 2 ts), F_Y(0, ts) = (1 + A e^B)(1 + C e^(D ts) + E cos^2 ts), "
-        "(A..E) = perez_Y[:, 0] T + perez_Y[:, 1]",
-        "algorithm": [
-            "refuse sun_zenith outside domain.sun_zenith, turbidity outside domain.turbidity, non-finite azimuth",
-            "x = clamp(sun_zenith * x.scale - x.shift, -1, 1); y = clamp(log(turbidity) * y.scale - y.shift, -1, 1)",
-            "T_0..T_DX at x and T_0..T_DY at y (Chebyshev: T_0 = 1, T_1 = t, T_k = 2 t T_(k-1) - T_(k-2))",
-            "acc[r][c] = sum_ij T_i(x) T_j(y) table[i][j][r][c] (with the certified irradiance table, by the rule of "
-            "the block irradiance_table: its table in place of table)",
-            "if gibbs: acc[r] *= gibbs[l] for the rows with m = 0",
-            "acc *= luminance_scale(sun_zenith, turbidity)",
-            "phi = fmod(sun_azimuth, 2 pi); out[l(l+1)+m] = acc[l(l+1)/2+|m|] * (cos(m phi) if m >= 0 else sin(|m| phi))",
-            "if dering (3 bands, not with the irradiance table): the least window of skysh.post.dering.dering that keeps "
-            "the irradiance non-negative, on the radiance",
-            "then the sun and the ground when asked (the blocks sun and ground), on the radiance",
-            "if irradiance: out[l(l+1)+m] *= lobe[l]",
-        ],
-        "units": "cd/m^2 (irradiance: cd/m^2*sr)",
-        "colourspace": "sRGB (linear, Rec. 709 primaries, D65)",
-        "convention": "Z up, azimuth from +X towards +Y, real orthonormal SH with the Condon-Shortley phase, "
-        "index l(l+1)+m (docs/conventions.md)",
-    }
-    payload.update(lights_json(tables.lights))
-    payload.update(irradiance_json(tables.irradiance if tables.bands == 3 else None))
-    if plan is not None:
-        payload["engine"] = {
-            "name": plan.engine, "shape": list(plan.shape), "labels": list(plan.labels),
-            "band_factor": plan.band_factor.tolist(), "matrix": plan.matrix.tolist(), "offset": plan.offset.tolist(),
-            "algorithm": "engine values (flattened row-major to shape) = matrix @ v + offset, v = the radiance "
-            "coefficients (no irradiance; by intent from the irradiance table, engines lighting diffusely) with band l "
-            "times band_factor[l], flattened coefficient-major (3 i + c)",
-        }
-    return json.dumps(payload, indent=1) + "\n"
+    dict (str keys), list, tuple or ndarray (flattened), str, bool, None and reals; numbers by
+    :func:`_number`, an array of more than :data:`_PER_LINE` of them :data:`_PER_LINE` a line.
+    """
+    inner = indent + "  "
+    if isinstance(value, dict):
+        items = [f"{json.dumps(key)}: {_data_text(item, inner)}" for key, item in value.items()]
+        return "{\n" + inner + (",\n" + inner).join(items) + "\n" + indent + "}"
+    if isinstance(value, np.ndarray):
+        value = value.ravel().tolist()
+    if isinstance(value, (list, tuple)):
+        if not (value and all(_is_number(v) for v in value)):
+            return "[" + ", ".join(_data_text(v, inner) for v in value) + "]"
+        rows = number_rows([_number(v) for v in value], inner, _PER_LINE)
+        return "[" + rows + "]" if len(value) <= _PER_LINE else "[\n" + inner + rows + "\n" + indent + "]"
+    if value is None or isinstance(value, (bool, str)):
+        return json.dumps(value)
+    return _number(value)
 
 
 def _engine_plans(bands: int) -> dict[str, list[EnginePlan | None]]:
@@ -430,36 +137,71 @@ def _engine_plans(bands: int) -> dict[str, list[EnginePlan | None]]:
     return plans
 
 
-def _numbers(values: NDArray[np.float64], indent: str) -> str:
-    return text_rows([double_literal(v) for v in np.ravel(values)], indent)
+def _plan_data(plan: EnginePlan | None) -> dict[str, Any] | None:
+    """An engine plan as the module reads it: ``matrix`` row p's nonzero terms at ``start[p] .. start[p + 1]``."""
+    if plan is None:
+        return None
+    start, index, factor = [0], [], []
+    for row in range(plan.offset.size):
+        for column, value in plan.terms(row):
+            index.append(column)
+            factor.append(value)
+        start.append(len(index))
+    return {"shape": list(plan.shape), "labels": list(plan.labels), "band": plan.band_factor, "start": start,
+            "index": index, "factor": factor, "offset": plan.offset}
 
 
-def _js_plan(plan: EnginePlan) -> str:
-    """One band count of one engine as a JS object literal: count, shape, labels, band, apply."""
-    lines = [f"o[{p}] = {plan.expression(p, lambda q: f'r[{q}]', double_literal)};" for p in range(plan.offset.size)]
-    return (
-        f"{{ count: {plan.offset.size}, shape: Object.freeze({json.dumps(list(plan.shape))}), "
-        f"labels: Object.freeze({json.dumps(list(plan.labels))}),\n"
-        f"      band: new Float64Array([{_numbers(plan.band_factor, '')}]),\n"
-        "      apply(r, o) {\n        " + "\n        ".join(lines) + "\n      } }"
-    )
+def _dering_data() -> dict[str, Any]:
+    """The constants of the module's 3-band deringing: :func:`skysh.post.dering.dering`'s (target irradiance)."""
+    rows = dering.window_table(DERING_BANDS, "irradiance")
+    return {"s1": rows[:, 1], "s2": rows[:, 2], "kernel": sh.cosine_lobe(DERING_BANDS),
+            "basis": [sh.Y00, sh.K_LINEAR, sh.K_PRODUCT, sh.K_ZONAL, sh.K_SECTORAL],
+            "guards": [shmin.TINY, shmin.FLOOR, shmin.POLE, shmin.ALLOWANCE], "steps": shmin.NEWTON_STEPS}
 
 
-def _js_engines(plans: dict[str, list[EnginePlan | None]]) -> str:
-    entries = []
-    for name, row in plans.items():
-        items = ",\n    ".join("null" if p is None else _js_plan(p) for p in row)
-        entries.append(f"  [{json.dumps(name)}, [\n    {items},\n  ]],")
-    return "\n".join(entries)
+def _rows(table: NDArray[np.float64]) -> NDArray[np.float64]:
+    """A (DX + 1, DY + 1, rows, 3) table as the module lays it out: (rows, terms, 3), each row's terms contiguous."""
+    return table.reshape(-1, table.shape[2], 3).transpose(1, 0, 2)
 
 
-def _options_text(bands: int, sky: runtime.SkySH) -> str:
-    return "" if bands == sky.bands else f" --bands {bands}"
+def _module_data(tables: ExportTables) -> dict[str, Any]:
+    """
+    The module's data object ``DATA`` for ``tables`` (:func:`skysh.export.tables.export_tables`), as Python values.
+
+    The keys and layouts are those ``js_module.mjs`` documents above ``const DATA``; arrays are
+    float64 (ndarray) or ints. :func:`module_source` writes it with every double's shortest text.
+    """
+    n, lights = tables.bands, tables.lights
+    table = _rows(tables.table)
+    if n == 1:  # the unfiltered c_10 as row 1, for the ground (stored row 1 from two bands on)
+        table = np.concatenate([table, lights.c10.reshape(1, -1, 3)])
+    plans = _engine_plans(n)
+    return {
+        "version": __version__, "maxBands": n, "defaultBands": min(3, n), "degrees": list(tables.degrees),
+        "x": [tables.x_scale, tables.x_shift], "y": [tables.y_scale, tables.y_shift],
+        "sunZenithDomain": list(tables.sun_zenith_domain), "turbidityDomain": list(tables.turbidity_domain),
+        "table": table, "gibbs": np.concatenate([runtime.gibbs_factors(k) for k in range(1, n + 1)]),
+        "lobe": tables.lobe, "perezY": PEREZ_Y, "zenithLuminance": list(ZENITH_LUMINANCE),
+        "lights": {"flags": light_flags(lights), "sunDegrees": [int(d) for d in lights.sun_degrees],
+                   "constants": dict(lights.constants), "sunTable": lights.sun_table, "rgbFromXyz": lights.rgb_from_xyz,
+                   "trig": lights.trig, "windows": lights.windows, "ground": lights.ground_zonal},
+        "irradiance": None if tables.irradiance is None else _rows(tables.irradiance),
+        "deringBands": [DERING_BANDS] if n >= DERING_BANDS else [],
+        "dering": _dering_data() if n >= DERING_BANDS else None,
+        "engines": [[name, [_plan_data(plan) for plan in row]] for name, row in plans.items()],
+    }
+
+
+def _words(sky: runtime.SkySH, tables: ExportTables) -> dict[str, str]:
+    """The holes the module and its declarations share: version, the command's options, bands, turbidity domain."""
+    n = tables.bands
+    return {"VERSION": __version__, "COMMAND_OPTIONS": "" if n == sky.bands else f" --bands {n}", "MAX_BANDS": str(n),
+            "DEFAULT_BANDS": str(min(3, n)), "TURBIDITY_DOMAIN": interval_text(*tables.turbidity_domain)}
 
 
 def module_source(sky: runtime.SkySH, bands: int | None = None) -> str:
     """
-    The ES module (``sky_sh.mjs``): tables, engine plans and ``coefficients()``.
+    The ES module (``sky_sh.mjs``): :data:`MODULE_TEMPLATE` with its header and data filled in.
 
     Parameters
     ----------
@@ -474,41 +216,19 @@ def module_source(sky: runtime.SkySH, bands: int | None = None) -> str:
     ValueError for ``bands`` out of range (see :func:`skysh.export.tables.export_tables`).
     """
     tables = export_tables(sky, sky.bands if bands is None else bands)
-    n = tables.bands
-    plans = _engine_plans(n)
-    dering = js_dering(n)
-    names = textwrap.fill(", ".join(json.dumps(e) for e in plans) or "none in this module", width=90,
-                          initial_indent=" " * 60, subsequent_indent=" *               ").strip()
-    default = min(3, n)
-    header = Template(_HEADER).substitute(
-        version=__version__, options=_options_text(n, sky), max_bands=n, default_bands=default,
-        dering_bands=", ".join(map(str, dering[0])) or "none", engine_list=names,
-        sun_zenith_domain=interval_text(*tables.sun_zenith_domain, pi=True),
-        turbidity_domain=interval_text(*tables.turbidity_domain),
-    )
-    gibbs = np.concatenate([runtime.gibbs_factors(k) for k in range(1, n + 1)])
-    constants = {k: double_literal(v) for k, v in ZENITH_CONSTANTS.items()}
-    rows = tables.table.reshape(-1, tables.table.shape[2], 3).transpose(1, 0, 2)  # (r, terms, c)
-    if n == 1:  # the unfiltered c_10 as row 1, for the ground (stored row 1 from two bands on)
-        rows = np.concatenate([rows, tables.lights.c10.reshape(1, -1, 3)])
-    return _MODULE.substitute(
-        constants,
-        header=header, max_bands=n, default_bands=default, dx=tables.degrees[0], dy=tables.degrees[1],
-        half3=rows.shape[0] * 3, lights=js_lights(tables.lights), irradiance=js_irradiance(tables.irradiance),
-        x_scale=double_literal(tables.x_scale), x_shift=double_literal(tables.x_shift),
-        y_scale=double_literal(tables.y_scale), y_shift=double_literal(tables.y_shift),
-        zmin=double_literal(tables.sun_zenith_domain[0]), zmax=double_literal(tables.sun_zenith_domain[1]),
-        tmin=double_literal(tables.turbidity_domain[0]), tmax=double_literal(tables.turbidity_domain[1]),
-        table=_numbers(rows, "  "),
-        gibbs=_numbers(gibbs, ""), lobe=_numbers(tables.lobe, ""),
-        perez=_numbers(PEREZ_Y, ""), engines=_js_engines(plans), dering_defs=dering[1],
-        version=json.dumps(__version__), engine_names=", ".join(json.dumps(e) for e in plans),
+    data = _module_data(tables)
+    names = ", ".join(json.dumps(name) for name, _ in data["engines"]) or "none in this module"
+    return template.fill(
+        MODULE_TEMPLATE, **_words(sky, tables), DATA=_data_text(data),
+        DERING_BANDS=", ".join(map(str, data["deringBands"])) or "none",
+        ENGINE_LIST=textwrap.fill(names, width=90, initial_indent=" " * 60, subsequent_indent=" *               ").strip(),
+        SUN_ZENITH_DOMAIN=interval_text(*tables.sun_zenith_domain, pi=True),
     )
 
 
 def declarations(sky: runtime.SkySH, bands: int | None = None) -> str:
     """
-    TypeScript declarations of :func:`module_source` with the same arguments.
+    TypeScript declarations of :func:`module_source` with the same arguments (:data:`DECLARATIONS_TEMPLATE`).
 
     Save them under :func:`declarations_path` of the module's path (``sky_sh.d.mts``
     beside ``sky_sh.mjs``): the name TypeScript looks for.
@@ -519,13 +239,8 @@ def declarations(sky: runtime.SkySH, bands: int | None = None) -> str:
         ``bands`` out of range.
     """
     tables = export_tables(sky, sky.bands if bands is None else bands)
-    n = tables.bands
-    names = list(_engine_plans(n))
-    return DECLARATIONS.substitute(
-        version=__version__, options=_options_text(n, sky), max_bands=n, default_bands=min(3, n),
-        engine_union=" | ".join(json.dumps(e) for e in names) or "never",
-        turbidity_domain=interval_text(*tables.turbidity_domain),
-    )
+    union = " | ".join(json.dumps(name) for name in _engine_plans(tables.bands)) or "never"
+    return template.fill(DECLARATIONS_TEMPLATE, **_words(sky, tables), ENGINE_UNION=union)
 
 
 def declarations_path(module_path: Path) -> Path:
@@ -534,3 +249,38 @@ def declarations_path(module_path: Path) -> Path:
     path = Path(module_path)
     stem = path.name[: -len(path.suffix)] if path.suffix else path.name
     return path.with_name(stem + (".d.mts" if path.suffix == ".mjs" else ".d.ts"))
+
+
+def json_source(tables: ExportTables, plan: EnginePlan | None = None) -> str:
+    """
+    The JSON export: :data:`JSON_TEMPLATE`'s fixed text with the float64 tables and constants (and ``plan``, if given).
+
+    The irradiance table's block holds the table only for 3 bands (``available`` false otherwise).
+    """
+    payload = json.loads(template.text(JSON_TEMPLATE))
+    lights, c = tables.lights, tables.lights.constants
+    payload.update(skysh_version=__version__, bands=tables.bands, degrees=list(tables.degrees),
+                   table=tables.table.tolist(), half_layout=[list(lm) for lm in tables.half_layout],
+                   gibbs=tables.gibbs.tolist(), lobe=tables.lobe.tolist(), perez_Y=PEREZ_Y.tolist())
+    payload["x"].update(scale=tables.x_scale, shift=tables.x_shift)
+    payload["y"].update(scale=tables.y_scale, shift=tables.y_shift)
+    payload["domain"].update(sun_zenith=list(tables.sun_zenith_domain), turbidity=list(tables.turbidity_domain))
+    sun = payload["sun"]
+    sun.update(available=lights.has_sun, degrees=list(lights.sun_degrees), table=lights.sun_table.tolist(),
+               rgb_from_xyz=lights.rgb_from_xyz.tolist(), trig=lights.windowed_trig().tolist(), clamp=c["clamp"])
+    sun["air_mass"].update(a=c["am_a"], b=c["am_b"], c=-c["am_neg_c"], m0=c["m0"], x_scale=c["sx_scale"])
+    sun["turbidity"].update(min=c["sun_tmin"], y_scale=c["sy_scale"])
+    payload["ground"].update(available=lights.has_ground, zonal=lights.ground_zonal.tolist(),
+                             c10_table=lights.c10.tolist(), horizontal_factor=c["hf"])
+    block, irradiance = payload["irradiance_table"], tables.irradiance if tables.bands == 3 else None
+    block.update(available=irradiance is not None, table=None if irradiance is None else irradiance.tolist())
+    if irradiance is None:
+        for key in ("table", "table_layout", "algorithm"):
+            del block[key]
+    if plan is None:
+        del payload["engine"]
+    else:
+        payload["engine"].update(name=plan.engine, shape=list(plan.shape), labels=list(plan.labels),
+                                 band_factor=plan.band_factor.tolist(), matrix=plan.matrix.tolist(),
+                                 offset=plan.offset.tolist())
+    return json.dumps(payload, indent=1) + "\n"

@@ -10,14 +10,14 @@ Every language of :mod:`skysh.export.c_like` (C, GLSL, HLSL) and of :mod:`skysh.
     maps and the sun's and the ground's numbers (:func:`skysh.export.lights.light_tables`).
 -   :class:`EnginePlan`, :func:`engine_plan`: an engine's linear conversion
     (:func:`skysh.engines.presets.engine_map`) split at the Z rotation (per-band factors
-    folded before it, the rest after it), for every export that takes an engine;
+    folded before it, the rest after it), for every export that takes an engine (its
+    nonzero terms, :meth:`EnginePlan.terms`, are the exports' index-and-factor tables);
     :data:`ENGINE_ZERO`, :data:`ENGINE_UNIT`: the rounding it snaps to 0 and +-1.
 """
 
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -105,7 +105,7 @@ dropped; the change to an output is below 1e-13 of the largest term."""
 ENGINE_UNIT: float = 1e-14
 """Entries within this of +-1 once the per-band factor is divided out are +-1 in closed form
 (the engines' maps are signs, axis permutations, exact 90-degree rotations and band
-constants, built numerically): they are written as additions, changing an output by
+constants, built numerically): they are snapped to exact +-1 factors, changing an output by
 at most this relative amount."""
 
 
@@ -126,7 +126,7 @@ class EnginePlan:
         (N,) per-band factors folded before the Z rotation (they commute with it):
         for each band the most common magnitude of its entries in the engine's
         map (for example A_l / pi times a basis constant), so that the most
-        entries of ``matrix`` are +-1 (written as additions).
+        entries of ``matrix`` are exactly +-1.
     matrix
         (P, N * N * 3): the rest of the map (frame change, signs, per-coefficient
         constants, packing), applied after the rotation; entries below
@@ -149,21 +149,6 @@ class EnginePlan:
         """The nonzero (column, value) pairs of ``matrix[row]``, columns ascending."""
         (columns,) = np.nonzero(self.matrix[row])
         return [(int(q), float(self.matrix[row, q])) for q in columns]
-
-    def expression(self, row: int, value: Callable[[int], str], literal: Callable[[float], str]) -> str:
-        """
-        ``matrix[row] . v + offset[row]`` as source text: ``value(q)`` names v[q], ``literal`` writes a number.
-
-        Coefficients +-1 become a bare addition or subtraction; zero terms are left out.
-        """
-        text = ""
-        for q, v in self.terms(row):
-            term = value(q) if abs(v) == 1.0 else f"{literal(abs(v))} * {value(q)}"
-            text = f"{text} {'-' if v < 0.0 else '+'} {term}" if text else ("-" if v < 0.0 else "") + term
-        bias = float(self.offset[row])
-        if bias != 0.0:
-            text = f"{text} {'-' if bias < 0.0 else '+'} {literal(abs(bias))}" if text else literal(bias)
-        return text or literal(0.0)
 
 
 def _most_common_magnitude(values: NDArray[np.float64]) -> float:

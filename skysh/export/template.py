@@ -11,16 +11,18 @@ statements (Filament's cmgen and pygfx's shader files work the same way):
     missing or an unused name is an error, as is a template with more than
     :data:`MAX_HOLES` distinct names.
 -   :func:`holes`: the names a template asks for; :func:`text`: a file as shipped.
--   :data:`TEMPLATE_DIR`, :data:`HOLE`, :data:`MAX_HOLES`.
+-   :func:`defines`: ``#define NAME value`` lines, the numbers and switches of a C-like
+    data section (the one form of C, GLSL and HLSL that Python writes).
+-   :data:`TEMPLATE_DIR`, :data:`HOLE`, :data:`MAX_HOLES`, :data:`MACRO`.
 """
 
 from __future__ import annotations
 
 import re
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
 
-__all__ = ["TEMPLATE_DIR", "HOLE", "MAX_HOLES", "text", "holes", "fill"]
+__all__ = ["TEMPLATE_DIR", "HOLE", "MAX_HOLES", "MACRO", "text", "holes", "fill", "defines"]
 
 TEMPLATE_DIR: Path = Path(__file__).with_name("templates")
 """The folder of the exports' source files (shipped as package data)."""
@@ -31,8 +33,11 @@ HOLE: re.Pattern[str] = re.compile(r"\{\{([A-Z][A-Z0-9_]*)\}\}")
 MAX_HOLES: int = 10
 """Issue 24: at most about ten names per template; numbers and switches only."""
 
+MACRO: re.Pattern[str] = re.compile(r"SKYSH_[A-Z0-9_]+")
+"""A name :func:`defines` writes: the exports' own upper-case ``SKYSH_`` prefix."""
 
-@lru_cache(maxsize=None)
+
+@cache
 def text(name: str) -> str:
     """The template file ``name`` (inside :data:`TEMPLATE_DIR`) as shipped."""
     path = TEMPLATE_DIR / name
@@ -41,7 +46,7 @@ def text(name: str) -> str:
     return path.read_text(encoding="utf-8")
 
 
-@lru_cache(maxsize=None)
+@cache
 def holes(name: str) -> frozenset[str]:
     """The distinct hole names of template ``name``; more than :data:`MAX_HOLES` is an error."""
     found = frozenset(HOLE.findall(text(name)))
@@ -67,3 +72,20 @@ def fill(name: str, **values: str) -> str:
         if not isinstance(value, str):
             raise ValueError(f"template {name}: {key} must be a str, got {type(value).__name__}")
     return HOLE.sub(lambda match: values[match.group(1)], text(name))
+
+
+def defines(values: dict[str, object]) -> str:
+    """
+    ``#define NAME value`` lines, one per entry in order, each ending with a newline.
+
+    ``values`` maps a :data:`MACRO` name to its text (``str(value)``: a literal already written,
+    an integer, or a comma-separated list of literals). Raises ValueError for another name or a
+    value spanning lines.
+    """
+    lines = []
+    for name, value in values.items():
+        text = str(value)
+        if not MACRO.fullmatch(name) or "\n" in text:
+            raise ValueError(f"#define {name!r}: the name must match {MACRO.pattern} and the value be one line")
+        lines.append(f"#define {name} {text}\n")
+    return "".join(lines)

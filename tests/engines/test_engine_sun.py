@@ -117,6 +117,7 @@ def test_negative_control_the_other_scale_fails(sky: SkySH, engine: str):
     assert scene_error(sky, engine, swapped) > CONTROL_MIN
 
 
+@pytest.mark.integration
 def test_js_snippets_build_the_lights_in_the_engines(sky: SkySH):
     """The three.js and Babylon.js snippets, run, hold colour x intensity = the sun's lux (clamped) and the
     preset's directions as the engines read them (WebGLLights' uniforms; Babylon's scaled intensity)."""

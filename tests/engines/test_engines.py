@@ -363,6 +363,7 @@ def node_results(node_runs: Prefetched[Any]) -> dict:
 THREE_OUTPUTS = (("getAt", radiance), ("getIrradianceAt", irradiance), ("probeShader", irradiance))
 
 
+@pytest.mark.integration
 @pytest.mark.late
 @pytest.mark.parametrize("output, reference", THREE_OUTPUTS, ids=[o for o, _ in THREE_OUTPUTS])
 def test_threejs_matches_skysh(node_results: dict, coefficient_sets: list, dirs: np.ndarray, output, reference):
@@ -373,6 +374,7 @@ def test_threejs_matches_skysh(node_results: dict, coefficient_sets: list, dirs:
         assert rel_error(np.array(values[k]), reference(c, dirs)) <= SIX_DIGIT_TOL, (output, k)
 
 
+@pytest.mark.integration
 @pytest.mark.late
 @pytest.mark.parametrize("output, reference", THREE_OUTPUTS, ids=[o for o, _ in THREE_OUTPUTS])
 def test_threejs_negative_control(node_results: dict, coefficient_sets: list, dirs: np.ndarray, output, reference):
@@ -382,6 +384,7 @@ def test_threejs_negative_control(node_results: dict, coefficient_sets: list, di
         assert rel_error(np.array(values[n + k]), reference(c, dirs)) > CONTROL_MIN, (output, k)
 
 
+@pytest.mark.integration
 @pytest.mark.late
 def test_babylon_default_path_matches_skysh(node_results: dict, coefficient_sets: list, dirs: np.ndarray):
     """SphericalHarmonics.FromArray -> SphericalPolynomial.FromHarmonics -> BindIBLParameters (default
@@ -394,6 +397,7 @@ def test_babylon_default_path_matches_skysh(node_results: dict, coefficient_sets
         assert rel_error(np.array(values[n + k]), reference) > CONTROL_MIN, k  # negative control
 
 
+@pytest.mark.integration
 @pytest.mark.late
 def test_babylon_serialized_polynomial(node_results: dict, coefficient_sets: list, dirs: np.ndarray):
     """A polynomial reloaded without its harmonics (SphericalPolynomial.FromArray) goes back through
@@ -403,6 +407,7 @@ def test_babylon_serialized_polynomial(node_results: dict, coefficient_sets: lis
         assert rel_error(np.array(values[k]), irradiance(c, dirs) / math.pi) <= BABYLON_SERIALIZED_TOL, k
 
 
+@pytest.mark.integration
 @pytest.mark.late
 def test_babylon_polynomial_branch_convolves_again(node_results: dict, coefficient_sets: list, dirs: np.ndarray):
     """Babylon's non-default branch (brdf.useSphericalHarmonics = false) evaluates the polynomial of
@@ -417,6 +422,7 @@ def test_babylon_polynomial_branch_convolves_again(node_results: dict, coefficie
         assert rel_error(np.array(values[k]), reference) > CONTROL_MIN, k
 
 
+@pytest.mark.integration
 @pytest.mark.late
 def test_babylon_cube_map_projector_agrees(node_results: dict):
     """Babylon's ConvertCubeMapToSphericalPolynomial, fed cube faces showing the skysh radiance in
@@ -428,6 +434,7 @@ def test_babylon_cube_map_projector_agrees(node_results: dict):
         assert rel_error(harmonics, pad9(c)) > CONTROL_MIN, k
 
 
+@pytest.mark.integration
 @pytest.mark.late
 @pytest.mark.parametrize("engine", ["threejs", "babylon"])
 def test_python_formulas_match_node(node_results: dict, coefficient_sets: list, dirs: np.ndarray, engine: str):
@@ -440,6 +447,7 @@ def test_python_formulas_match_node(node_results: dict, coefficient_sets: list, 
         assert rel_error(mine, node) <= EXACT_TOL, k
 
 
+@pytest.mark.integration
 @pytest.mark.late
 def test_js_snippets_run_and_build_the_numbers(coefficient_sets: list, node_runs: Prefetched[Any]):
     """Both JavaScript snippets, run in one node module (:func:`snippets_program`), build engine objects holding

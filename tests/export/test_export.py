@@ -32,6 +32,7 @@ demanding one.
 The C export is compiled with the machine's C compiler (skipped without one);
 GLSL and HLSL are validated with glslangValidator when it is installed
 (Debian's ``glslang-tools``; skipped otherwise) and always checked structurally.
+The tests that compile C or run glslangValidator carry the ``integration`` marker.
 Compiles and validations go through the session's :class:`background.ToolRuns`: each
 distinct one (command, header and harness text) is made once and shared by the tests
 that need it (one harness, test_export_lights.C_HARNESS, serves ``skysh_coefficients`` and
@@ -59,7 +60,7 @@ import numpy as np
 import pytest
 from background import GLSLANG, RUN_DIR, ToolJob, ToolRuns, glslang_job, selected_names
 from conftest import PLAIN_DIP, SKIP_NO_CC, SKIP_NO_GLSLANG, Exported, dc_relative_error, engine_cases, is_padded_identity
-from test_export_lights import CC, c_harness_job, compile_harness
+from test_export_lights import CC, c_harness_job, compile_harness, parse_table
 
 from skysh import SkySH
 from skysh.app import cli
@@ -184,10 +185,19 @@ def evaluate_tables(
 
 
 def parse_shader_table(source: str, name: str = "SKYSH_TABLE") -> np.ndarray:
-    """The numbers of a vec3 table (SKYSH_TABLE, SKYSH_IRRADIANCE) of a GLSL or HLSL export, (n, 3) float32."""
-    block = source.split(f" {name}[", 1)[1].split(";", 1)[0]
-    triples = re.findall(r"(?:vec3|float3)\(([^()]*)\)", block)
-    return np.array([[np.float32(v) for v in triple.split(",")] for triple in triples], dtype=np.float32)
+    """The numbers of an RGB table (SKYSH_TABLE, SKYSH_IRRADIANCE) of a GLSL or HLSL export, (n, 3) float32, in its
+    order: r-major, [3 (r SKYSH_TERMS + i (SKYSH_DY + 1) + j) + c] (skysh/export/templates/c_like_data.h)."""
+    return parse_table(source, name).reshape(-1, 3)
+
+
+def terms_major(rows: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    """An r-major table as the exports store it, (rows x terms, 3), as ``shape`` (DX + 1, DY + 1, rows, 3)."""
+    return rows.reshape(shape[2], shape[0], shape[1], 3).transpose(1, 2, 0, 3)
+
+
+def r_major(table: np.ndarray) -> np.ndarray:
+    """(DX + 1, DY + 1, rows, 3) in the exports' order, (rows x terms, 3): the inverse of :func:`terms_major`."""
+    return table.reshape(-1, table.shape[2], 3).transpose(1, 0, 2).reshape(-1, 3)
 
 
 def shader_float32_table_error(sky: SkySH, source: str, bands: int) -> float:
@@ -195,7 +205,7 @@ def shader_float32_table_error(sky: SkySH, source: str, bands: int) -> float:
     tables = export_tables(sky, bands)
     table32 = parse_shader_table(source)
     rows = tables.table.shape[2] + (bands == 1)  # one band: the unfiltered c_10 follows (not evaluated here)
-    table = table32.astype(np.float64).reshape(tables.table.shape[:2] + (rows, 3))[:, :, : tables.table.shape[2]]
+    table = terms_major(table32.astype(np.float64), tables.table.shape[:2] + (rows,))[:, :, : tables.table.shape[2]]
     pts = points()
     got = np.array([
         evaluate_tables(
@@ -282,7 +292,7 @@ def choice_shader(source: str, version: str, engine: str | None) -> str:
 
 def turned_the_other_way(source: str) -> str:
     """The C header ``source`` with its rotation (Habel eq. 4) turning the other way (a negative control)."""
-    return source.replace("const skysh_real rot = m < 0 ? sin(k * phi)", "const skysh_real rot = m < 0 ? -sin(k * phi)")
+    return source.replace("SKYSH_REAL rot = m < 0 ? SKYSH_SIN(", "SKYSH_REAL rot = m < 0 ? -SKYSH_SIN(")
 
 
 def c_jobs(exported: Exported, wanted: set[str]) -> Iterator[Job]:
@@ -308,7 +318,7 @@ def shader_jobs(exported: Exported, wanted: set[str]) -> Iterator[Job]:
     """The glslangValidator runs of the tests named in ``wanted``."""
     if GLSLANG is None:
         return
-    if "test_shader_structure" in wanted:
+    if "test_shader_compiles" in wanted:
         yield from (glslang_job(engine_shader(exported(language, bands=bands, engine=name), language), language)
                     for name, bands in engine_cases() for language in ("glsl", "hlsl"))
     if "test_glsl_compiles" in wanted:
@@ -333,6 +343,7 @@ def _prefetch(request: pytest.FixtureRequest, exported: Exported, tool_runs: Too
 
 
 # --------------------------------------------------------------------------- #
+@pytest.mark.integration
 @pytest.mark.skipif(CC is None, reason=SKIP_NO_CC)
 class TestCExport:
     @pytest.mark.parametrize("bands", [1, 3, 7])
@@ -363,6 +374,7 @@ class TestCExport:
         assert dc_relative_error(got, runtime_values(sky, edges, 2)) < DOUBLE_TOLERANCE
 
 
+@pytest.mark.integration
 @pytest.mark.skipif(CC is None, reason=SKIP_NO_CC)
 class TestCHeader:
     """Issue 13: the C export is a header; the azimuth is reduced as the runtime does."""
@@ -391,6 +403,7 @@ class TestCHeader:
         assert dc_relative_error(got, runtime_values(sky, pts, 7)) < AZIMUTH_TOLERANCE
 
 
+@pytest.mark.integration
 @pytest.mark.skipif(CC is None, reason=SKIP_NO_CC)
 class TestCDering:
     """The 3-band deringing step (skysh.export.dering) against the runtime's dering, window for window."""
@@ -492,6 +505,7 @@ def builds(exported: Exported, tool_runs: ToolRuns) -> dict[str, Path]:
             for name, bands, real in (("3", 3, "double"), ("3f", 3, "float"), ("7", 7, "double"))}
 
 
+@pytest.mark.integration
 @pytest.mark.skipif(CC is None, reason=SKIP_NO_CC)
 class TestCIrradianceTable:
     @pytest.mark.parametrize(("name", "bands", "tolerance"), [("3", 3, DOUBLE_TOLERANCE), ("3f", 3, FLOAT32_TOLERANCE),
@@ -602,6 +616,7 @@ def run_engine_c(source: str, runs: ToolRuns, pts: list) -> tuple[np.ndarray, np
     return rows[:, 0], rows[:, 1:]
 
 
+@pytest.mark.integration
 @pytest.mark.skipif(CC is None, reason=SKIP_NO_CC)
 class TestCEngineExport:
     @pytest.mark.parametrize(("name", "bands"), engine_cases())
@@ -686,18 +701,34 @@ class TestEngineOtherLanguages:
         assert engine["shape"] == list(np.asarray(ref[0]).reshape(engine["shape"]).shape)
         assert float(np.abs(np.array(got) - ref).max()) / scale < DOUBLE_TOLERANCE
 
-    @pytest.mark.parametrize("language", ["glsl", "hlsl"])
+    @pytest.mark.parametrize("language", ["c", "glsl", "hlsl"])
     @pytest.mark.parametrize(("name", "bands"), engine_cases())
-    def test_shader_structure(self, exported: Exported, tool_runs: ToolRuns, language: str, name: str, bands: int) -> None:
-        source = exported(language, bands=bands, engine=name)
-        count = engine_plan(name, bands).offset.size
+    def test_engine_table_is_the_plan(self, exported: Exported, language: str, name: str, bands: int) -> None:
+        """The (output, input, factor) terms and the offsets of skysh/export/templates/c_like_engine.h rebuild the
+        plan's matrix and offset (double in C, float32 in the shaders, exactly), each output's terms in column order."""
+        source, plan = exported(language, bands=bands, engine=name), engine_plan(name, bands)
+        dtype = np.float64 if language == "c" else np.float32
+        count = plan.offset.size
         assert f"#define SKYSH_ENGINE_COUNT {count}" in source
-        assert "bool skysh_engine_coefficients(" in source
-        assert len(re.findall(r"^    values\[\d+\] = ", source, re.MULTILINE)) == count
+        assert ("int" if language == "c" else "bool") + " skysh_engine_coefficients(" in source
+        outputs, inputs = (parse_table(source, f"SKYSH_ENGINE_{part}", np.float64).astype(int) for part in ("OUTPUT", "INPUT"))
+        factors = parse_table(source, "SKYSH_ENGINE_FACTOR", dtype)
+        assert f"#define SKYSH_ENGINE_TERMS {factors.size}" in source and outputs.size == inputs.size == factors.size
+        rebuilt = np.zeros(plan.matrix.shape, dtype=dtype)
+        rebuilt[outputs, inputs] = factors
+        np.testing.assert_array_equal(rebuilt, plan.matrix.astype(dtype))
+        assert np.all(np.diff(outputs * plan.matrix.shape[1] + inputs) > 0)  # row-major, no repeated term
+        np.testing.assert_array_equal(parse_table(source, "SKYSH_ENGINE_OFFSET", dtype), plan.offset.astype(dtype))
+        np.testing.assert_array_equal(parse_table(source, "SKYSH_ENGINE_BAND", dtype), plan.band_factor.astype(dtype))
         for open_, close in ("()", "{}", "[]"):
             assert source.count(open_) == source.count(close)
-        if GLSLANG is None:
-            return
+
+    @pytest.mark.integration
+    @pytest.mark.skipif(GLSLANG is None, reason=SKIP_NO_GLSLANG)
+    @pytest.mark.parametrize("language", ["glsl", "hlsl"])
+    @pytest.mark.parametrize(("name", "bands"), engine_cases())
+    def test_shader_compiles(self, exported: Exported, tool_runs: ToolRuns, language: str, name: str, bands: int) -> None:
+        source = exported(language, bands=bands, engine=name)
         result = tool_runs.run(*glslang_job(engine_shader(source, language), language)).result
         assert result.returncode == 0, result.stdout + result.stderr
 
@@ -713,7 +744,7 @@ class TestShaderExport:
         if bands == 1:
             stored = np.concatenate([stored, tables.lights.c10[:, :, None, :]], axis=2)
         assert table.shape == (stored[..., 0].size, 3)
-        np.testing.assert_array_equal(table, stored.reshape(-1, 3).astype(np.float32))  # exact float32 round trip
+        np.testing.assert_array_equal(table, r_major(stored).astype(np.float32))  # exact float32 round trip
         for open_, close in ("()", "{}", "[]"):
             assert source.count(open_) == source.count(close)
         assert f"#define SKYSH_COUNT {bands * bands}" in source
@@ -725,6 +756,7 @@ class TestShaderExport:
     def test_float32_tables(self, sky: SkySH, exported: Exported, bands: int) -> None:
         assert shader_float32_table_error(sky, exported("glsl", bands=bands), bands) < FLOAT32_TABLE_TOLERANCE
 
+    @pytest.mark.integration
     @pytest.mark.skipif(GLSLANG is None, reason=SKIP_NO_GLSLANG)
     @pytest.mark.parametrize("version", GLSL_VERSIONS)
     @pytest.mark.parametrize("bands", SHADER_BANDS)
@@ -732,6 +764,7 @@ class TestShaderExport:
         result = tool_runs.run(*glslang_job(sky_shader(exported("glsl", bands=bands), version), "glsl")).result
         assert result.returncode == 0, result.stdout + result.stderr
 
+    @pytest.mark.integration
     @pytest.mark.skipif(GLSLANG is None, reason=SKIP_NO_GLSLANG)
     @pytest.mark.parametrize("bands", SHADER_BANDS)
     def test_hlsl_compiles(self, exported: Exported, tool_runs: ToolRuns, bands: int) -> None:
@@ -757,11 +790,11 @@ class TestShaderIrradianceTable:
     def test_round_trip_and_presence(self, sky: SkySH, exported: Exported, language: str) -> None:
         source = exported(language, bands=3)
         table = parse_shader_table(source, "SKYSH_IRRADIANCE")
-        np.testing.assert_array_equal(table, export_tables(sky, 3).irradiance.reshape(-1, 3).astype(np.float32))
+        np.testing.assert_array_equal(table, r_major(export_tables(sky, 3).irradiance).astype(np.float32))
         assert "#define SKYSH_IRRADIANCE_TABLE 1" in source
         for bands in (1, 7):  # no table: irradianceTable 1 is refused, by intent is the sky's pipeline
-            other = exported(language, bands=bands)
-            assert "#define SKYSH_IRRADIANCE_TABLE 0" in other and " SKYSH_IRRADIANCE[" not in other
+            other = exported(language, bands=bands)  # (its declaration, empty, is skipped by #if SKYSH_IRRADIANCE_TABLE)
+            assert "#define SKYSH_IRRADIANCE_TABLE 0" in other and parse_shader_table(other, "SKYSH_IRRADIANCE").size == 0
 
     @pytest.mark.parametrize("language", ["glsl", "hlsl"])
     def test_float32_table_matches_the_runtime(self, sky: SkySH, exported: Exported, language: str) -> None:
@@ -769,8 +802,8 @@ class TestShaderIrradianceTable:
         same way miss the runtime's table (negative control)."""
         source, tables = exported(language, bands=3), export_tables(sky, 3)
         shape = tables.irradiance.shape
-        table = parse_shader_table(source, "SKYSH_IRRADIANCE").astype(np.float64).reshape(shape)
-        sky_rows = parse_shader_table(source).astype(np.float64).reshape(shape)
+        table = terms_major(parse_shader_table(source, "SKYSH_IRRADIANCE").astype(np.float64), shape)
+        sky_rows = terms_major(parse_shader_table(source).astype(np.float64), shape)
         worst = control = 0.0
         for p in table_points()[::4]:
             ref = sky.coefficients(*p[:3], bands=3, irradiance=bool(p[4]), irradiance_table=True)
@@ -780,12 +813,14 @@ class TestShaderIrradianceTable:
 
     def test_float32_table_is_never_negative(self, sky: SkySH, exported: Exported) -> None:
         tables = export_tables(sky, 3)
-        table = parse_shader_table(exported("glsl", bands=3), "SKYSH_IRRADIANCE").astype(np.float64)
+        table = terms_major(parse_shader_table(exported("glsl", bands=3), "SKYSH_IRRADIANCE").astype(np.float64),
+                            tables.irradiance.shape)
         rng = np.random.default_rng(1803)
-        got = np.array([evaluate_table(table.reshape(tables.irradiance.shape), tables, (z, t, a), True) for z, t, a in
+        got = np.array([evaluate_table(table, tables, (z, t, a), True) for z, t, a in
                         zip(rng.uniform(0.0, math.pi / 2.0, 1000), rng.uniform(2.5, 6.0, 1000), rng.uniform(-3.0, 3.0, 1000))])
         assert relative_minimum(got).min() >= 0.0
 
+    @pytest.mark.integration
     @pytest.mark.skipif(GLSLANG is None, reason=SKIP_NO_GLSLANG)
     @pytest.mark.parametrize("version", CHOICE_VERSIONS)
     @pytest.mark.parametrize("engine", CHOICE_ENGINES)
@@ -932,8 +967,9 @@ def table_figures(sky: SkySH, runs: ToolRuns) -> list[dict]:
             rows.append({"export": f"c ({real}) tabulated irradiance", "measure": "least exact minimum / mean",
                          "points": NONNEGATIVE_POINTS, "value": float(relative_minimum(table).min())})
     tables = export_tables(sky, 3)
-    table = parse_shader_table(export_source(sky, "glsl", bands=3), "SKYSH_IRRADIANCE").astype(np.float64)
-    worst = max(dc_relative_error(evaluate_table(table.reshape(tables.irradiance.shape), tables, p, bool(p[4])),
+    table = terms_major(parse_shader_table(export_source(sky, "glsl", bands=3), "SKYSH_IRRADIANCE").astype(np.float64),
+                        tables.irradiance.shape)
+    worst = max(dc_relative_error(evaluate_table(table, tables, p, bool(p[4])),
                                   sky.coefficients(*p[:3], irradiance=bool(p[4]), irradiance_table=True)) for p in pts)
     rows.append({"export": "glsl/hlsl float32 irradiance table, double arithmetic", "bands": 3, "error": worst})
     return rows

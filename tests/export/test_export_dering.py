@@ -2,17 +2,19 @@
 Tests of :mod:`skysh.export.dering`: the generated deringing runs as Python does
 ================================================================================
 
-The C source is compiled with gcc and the JavaScript run with node, on lights,
-skies, random (mostly impossible) functions and extreme magnitudes; both must pick
-Python's row, failure flag and windowed coefficients exactly (double precision,
-the same table, start and Newton steps). The HLSL text, compiled as C in float
-(``-fsingle-precision-constant``), must never window less than Python and match it
-except near a tie; GLSL and HLSL must pass ``glslangValidator`` (skipped where the
-tool is missing). A corrupted table is the negative control: the comparison must
-catch it.
+The deringing is one hand-written kernel, ``skysh/export/templates/c_like_dering3.h``, over
+the words of each language. The C source is compiled with gcc, on lights, skies, random
+(mostly impossible) functions and extreme magnitudes; it must pick Python's row, failure
+flag and windowed coefficients exactly (double precision, the same table, start and Newton
+steps). The HLSL text, compiled as C in float (``-fsingle-precision-constant``, HLSL's
+qualifiers defined away), must never window less than Python and match it except near a
+tie; GLSL and HLSL must pass ``glslangValidator`` (skipped where the tool is missing). A
+corrupted table is the negative control: the comparison must catch it. (The JavaScript
+export's deringing is its own, tested with it: ``tests/export/test_export_js.py``.)
 
 Compiles and validations go through the session's :class:`background.ToolRuns` (each
-distinct one once), queued when the module starts (:func:`_prefetch`).
+distinct one once), queued when the module starts (:func:`_prefetch`); those tests carry
+the ``integration`` marker.
 ``python tests/export/test_export_dering.py`` prints the float build's agreement with Python.
 """
 
@@ -30,11 +32,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 from background import GLSLANG, RUN_DIR, ToolJob, ToolRuns
-from conftest import L_OF, SKIP_NO_CC, SKIP_NO_GLSLANG, SKIP_NO_NODE, light, random_functions, sky_samples
+from conftest import L_OF, SKIP_NO_CC, SKIP_NO_GLSLANG, light, random_functions, sky_samples
 
 from skysh.export import dering as export_dering
 from skysh.post import dering
 from skysh.sh import basis as sh
+from skysh.sh import minimum as shmin
 
 FLOAT_TIE_RTOL: float = 1e-4
 """Float (GLSL / HLSL) may window one row more than Python where Python's minimum at
@@ -54,7 +57,7 @@ normal float32 (m below 2^125, 4.3e37; a GPU flushes subnormals to zero); 1e30 k
 inputs beyond it (up to 1e300) are for the double builds."""
 
 RUN_TIMEOUT_S: float = 300.0
-"""Hang guard of one run of a built program or node over all the inputs (well under a second normally)."""
+"""Hang guard of one run of a built program over all the inputs (well under a second normally)."""
 
 GCC: str | None = shutil.which("gcc")
 
@@ -92,21 +95,6 @@ int main(void) {
 }
 """
 """The HLSL function as C in float: qualifiers removed, HLSL's abs/max/min mapped."""
-
-JS_MAIN = """
-%s
-const out = [];
-for (const line of require("fs").readFileSync(0, "utf8").trim().split("\\n")) {
-  const v = line.split(" ").map(Number);
-  const c = [];
-  for (let k = 0; k < 9; k++) c.push([v[3 * k], v[3 * k + 1], v[3 * k + 2]]);
-  const s = [0, 0, 0];
-  const failed = skysh_dering3(c, s);
-  out.push([failed, ...s, ...c.flat()].join(" "));
-}
-console.log(out.join("\\n"));
-"""
-
 
 def inputs() -> np.ndarray:
     """(n, 9, 3) radiance SH: lights, skies without the Gibbs filter, random functions,
@@ -157,10 +145,9 @@ def corrupted_source() -> str:
 
 
 def float_source() -> str:
-    """:data:`FLOAT_MAIN` around the HLSL text made C: qualifiers removed (HLSL's abs/max/min mapped by macros)."""
-    hlsl = export_dering.dering_source("hlsl").replace("inout float c[27]", "float c[27]")
-    hlsl = hlsl.replace("out float scales_out[3]", "float scales_out[3]").replace("static const", "const")
-    return FLOAT_MAIN % hlsl
+    """:data:`FLOAT_MAIN` around the HLSL text made C: its qualifiers ``inout`` and ``out`` defined away (HLSL's
+    abs/max/min mapped by macros; ``static const`` is C too)."""
+    return FLOAT_MAIN % ("#define inout\n#define out\n" + export_dering.dering_source("hlsl"))
 
 
 FLOAT_FLAGS: tuple[str, ...] = ("-fsingle-precision-constant",)
@@ -219,6 +206,7 @@ def float_rows(data: np.ndarray, exe: Path) -> tuple[np.ndarray, np.ndarray, np.
     return row_py, row_f, failed, res[:, 0].astype(bool), near
 
 
+@pytest.mark.integration
 class TestDouble:
     @pytest.mark.parametrize("target", dering.DERING_TARGETS)
     def test_c_matches_python(self, data: np.ndarray, target: str, tool_runs: ToolRuns) -> None:
@@ -226,17 +214,6 @@ class TestDouble:
         res = run([str(exe)], data)
         out, scales, failed = python_result(data, target)
         assert failed.any() and not failed.all()  # both outcomes exercised
-        np.testing.assert_array_equal(res[:, 0].astype(bool), failed)
-        np.testing.assert_array_equal(res[:, 1:4], scales)
-        np.testing.assert_array_equal(res[:, 4:].reshape(-1, 9, 3), out)
-
-    def test_js_matches_python(self, data: np.ndarray, tmp_path: Path) -> None:
-        if shutil.which("node") is None:
-            pytest.skip(SKIP_NO_NODE)
-        script = tmp_path / "dering.js"
-        script.write_text(JS_MAIN % export_dering.dering_source("js"))
-        res = run(["node", str(script)], data)
-        out, scales, failed = python_result(data)
         np.testing.assert_array_equal(res[:, 0].astype(bool), failed)
         np.testing.assert_array_equal(res[:, 1:4], scales)
         np.testing.assert_array_equal(res[:, 4:].reshape(-1, 9, 3), out)
@@ -249,6 +226,7 @@ class TestDouble:
         assert np.any(res[:, 1:4] != python_result(data)[1])
 
 
+@pytest.mark.integration
 class TestFloat:
     def test_hlsl_as_float_c_is_python_or_more_conservative(self, data: np.ndarray, tool_runs: ToolRuns) -> None:
         row_py, row_f, failed, failed_f, near = float_rows(data, compile_c(float_source(), tool_runs, "dering_f",
@@ -267,19 +245,42 @@ class TestFloat:
 
 class TestSource:
     def test_interface(self) -> None:
-        heads = {"c": "int skysh_dering3(double c[9][3], double scales_out[3])",
-                 "glsl": "int skysh_dering3(inout float c[27], out float scales_out[3])",
-                 "hlsl": "int skysh_dering3(inout float c[27], out float scales_out[3])",
-                 "js": "function skysh_dering3(c, scales_out)"}
-        for language, head in heads.items():
+        """The function is the kernel's, over each language's words: C int name(double c[9][3], double scales_out[3]),
+        GLSL and HLSL int name(inout float c[27], out float scales_out[3]) (tests/export/test_templates.py checks the
+        preprocessed signatures with the compiler and glslangValidator)."""
+        head = "int SKYSH_DERING_NAME(SKYSH_INOUT SKYSH_DERING_COEFFS(c), SKYSH_OUT SKYSH_DREAL scales_out[3])"
+        words = {"c": ("#define SKYSH_DERING_COEFFS(name) double name[9][3]", "#define SKYSH_DREAL double"),
+                 "glsl": ("#define SKYSH_DERING_COEFFS(name) float name[27]", "#define SKYSH_INOUT inout"),
+                 "hlsl": ("#define SKYSH_DERING_COEFFS(name) float name[27]", "#define SKYSH_OUT out")}
+        for language, defined in words.items():
             source = export_dering.dering_source(language)
-            assert head in source and source.count("{") == source.count("}")
-        assert "function sky(" in export_dering.dering_source("js", name="sky")
+            assert head in source and all(w in source for w in defined) and source.count("{") == source.count("}")
+            assert "#define SKYSH_DERING_NAME skysh_dering3\n" in source
+        assert "#define SKYSH_DERING_NAME sky\n" in export_dering.dering_source("c", name="sky")
         assert math.isclose(float(repr(float(dering.WINDOW_TABLE[-1, 1]))), dering.WINDOW_TABLE[-1, 1])
 
+    @pytest.mark.parametrize("target", dering.DERING_TARGETS)
+    def test_numbers_are_python_s(self, target: str) -> None:
+        """The #defines the kernel reads: the window table, the kernel, the basis constants, the steps and the guards of
+        skysh.post.dering and skysh.sh.minimum, read back exactly (double for C, float32 for the shaders)."""
+        table = dering.window_table(3, target)
+        for precision, dtype in (("double", np.float64), ("float", np.float32)):
+            defines = dict(line.split(" ", 2)[1:] for line in export_dering.dering_defines(target, precision).splitlines())
+            numbers = {name: np.array(text.split(", "), dtype=np.float64).astype(dtype) for name, text in defines.items()
+                       if name not in ("SKYSH_DERING_NAME", "SKYSH_DERING_ROWS", "SKYSH_DERING_STEPS")}
+            np.testing.assert_array_equal(numbers["SKYSH_DERING_TAB1"], table[:, 1].astype(dtype))
+            np.testing.assert_array_equal(numbers["SKYSH_DERING_TAB2"], table[:, 2].astype(dtype))
+            np.testing.assert_array_equal(numbers["SKYSH_DERING_KERNEL"],
+                                          dering.KERNELS[target][sh.band_of_index(3)].astype(dtype))
+            assert numbers["SKYSH_K_ZONAL"] == dtype(sh.K_ZONAL) and numbers["SKYSH_Y00"] == dtype(sh.Y00)
+            assert int(defines["SKYSH_DERING_ROWS"]) == len(table) and int(defines["SKYSH_DERING_STEPS"]) == shmin.NEWTON_STEPS
+            guards = export_dering.GUARDS[precision]
+            assert [numbers[f"SKYSH_DERING_{k}"] for k in ("TINY", "FLOOR", "POLE", "ROUND")] == [dtype(g) for g in guards]
+
     def test_bad_input(self) -> None:
-        with pytest.raises(ValueError, match="language"):
-            export_dering.dering_source("rust")
+        for language in ("rust", "js"):  # the JavaScript export writes its own deringing
+            with pytest.raises(ValueError, match="language"):
+                export_dering.dering_source(language)
         with pytest.raises(ValueError, match="target"):
             export_dering.dering_source("c", target="luminance")
         with pytest.raises(ValueError, match="name"):

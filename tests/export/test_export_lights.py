@@ -23,6 +23,7 @@ the largest channel. ``python tests/export/test_export_lights.py`` prints the me
 Compiles and validations go through the session's :class:`background.ToolRuns` (each distinct
 one once: the harness, :data:`C_HARNESS`, is also tests/export/test_export.py's, so the builds of the
 same headers are shared in one process); the module queues them all when it starts (:func:`_prefetch`).
+The tests that compile or validate carry the ``integration`` marker.
 """
 
 from __future__ import annotations
@@ -46,7 +47,7 @@ from conftest import PLAIN_DIP, SKIP_NO_CC, SKIP_NO_GLSLANG, Exported, dc_relati
 
 from skysh import SkySH
 from skysh.export.c_like import export_source
-from skysh.export.lights import BY_INTENT, embed_table, float32_literal, light_tables
+from skysh.export.lights import BY_INTENT, light_tables
 from skysh.export.tables import export_tables
 from skysh.model import preetham
 from skysh.sh import basis as sh
@@ -218,13 +219,13 @@ MUTATIONS: list[str] = ["ground without the Gibbs filter", "sun colour not clamp
 def mutate(source: str, mutation: str) -> str:
     """The C header ``source`` with one of :data:`MUTATIONS` (unchanged if its code is not found)."""
     if mutation.startswith("ground without"):
-        return source.replace("(gibbs ? SKYSH_GIBBS[l] : 1.0)", "(gibbs ? 1.0 : 1.0)")
+        return source.replace("(gibbs ? SKYSH_GIBBS[l] : 1.0f)", "(gibbs ? 1.0f : 1.0f)")
     if mutation.startswith("ground lit"):  # the table's rows summed before the sky's E_h is taken from row 1
-        start = source.index("\n    if (table) /* step 3 from the certified")
-        step = source[start:source.index("\n    for (l = 0; l < SKYSH_BANDS")]
-        e_sky = "\n    for (c = 0; c < 3; ++c)\n        e_sky[c] ="
+        start = source.index("\n#if SKYSH_IRRADIANCE_TABLE\n    if (table == 1) /* step 3 from the certified")
+        step = source[start:source.index("\n#endif", start) + len("\n#endif")]
+        e_sky = "\n    for (int c = 0; c < 3; ++c)\n        e_sky[c] ="
         return source.replace(step, "").replace(e_sky, step + e_sky)
-    return source.replace("rgb[c] = rgb[c] > 0.0 ? rgb[c] : 0.0;", "")
+    return source.replace("rgb[c] = rgb[c] > SKYSH_SUN_CLAMP ? rgb[c] : SKYSH_SUN_CLAMP;", "")
 
 
 def without(sky: SkySH, table: str) -> SkySH:
@@ -292,6 +293,8 @@ def _prefetch(request: pytest.FixtureRequest, exported: Exported, tool_runs: Too
 
 
 # --------------------------------------------------------------------------- #
+@pytest.mark.integration
+@pytest.mark.skipif(CC is None, reason=SKIP_NO_CC)
 class TestC:
     @pytest.mark.parametrize("name", ["1", "3", "7"])
     def test_random_inputs_match_the_runtime(self, sky: SkySH, binaries: dict[str, Path], name: str) -> None:
@@ -365,12 +368,15 @@ class TestC:
 
 
 # --------------------------------------------------------------------------- #
-def parse_table(source: str, name: str) -> np.ndarray:
-    """The numbers of ``name`` in a GLSL or HLSL export (float32)."""
-    block = source.split(f" {name}[", 1)[1].split(";", 1)[0]
-    block = block.split("=", 1)[1]
-    numbers = re.findall(r"[-+]?\d+\.?\d*(?:e[-+]?\d+)?", block.split("(", 1)[-1] if "float[" in block else block)
-    return np.array([np.float32(v) for v in numbers], dtype=np.float32)
+def parse_table(source: str, name: str, dtype: type = np.float32) -> np.ndarray:
+    """The numbers of the table ``name`` of a C, GLSL or HLSL export, flat (``dtype``: float32 for the shaders, float64
+    for a double C header): its declaration ``SKYSH_CONST type NAME[size] = SKYSH_ARRAY(type, size) ... SKYSH_END;``
+    (skysh/export/templates/c_like_data.h), the numbers between the array's opening and SKYSH_END."""
+    declaration = re.search(rf"^SKYSH_CONST \w+ {name}\[[^\]]*\] =\s*SKYSH_ARRAY\((?:[^()]|\([^()]*\))*\)(.*?)SKYSH_END;",
+                            source, re.MULTILINE | re.DOTALL)
+    assert declaration is not None, name
+    numbers = re.findall(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?", declaration.group(1))
+    return np.array([dtype(v) for v in numbers], dtype=dtype)
 
 
 SHADER_MAIN: dict[str, str] = {
@@ -398,6 +404,7 @@ class TestShaders:
             np.testing.assert_array_equal(parse_table(source, name), np.ravel(values).astype(np.float32), err_msg=name)
         assert "skysh_sun_light(" in source and "#define SKYSH_LIGHTS 3" in source
 
+    @pytest.mark.integration
     @pytest.mark.skipif(GLSLANG is None, reason=SKIP_NO_GLSLANG)
     @pytest.mark.parametrize("version", SHADER_VERSIONS)
     @pytest.mark.parametrize("bands", SHADER_BANDS)
@@ -478,20 +485,22 @@ class TestGenerator:
         np.testing.assert_allclose(trig @ lights.windowed_trig().T, expected, rtol=0, atol=WINDOWED_TRIG_TOL)
         np.testing.assert_array_equal(lights.c10, export_tables(sky, 4).table[:, :, 1, :])  # stored row (1, 0)
 
-    @pytest.mark.parametrize(("kwargs", "name"), [
-        ({"language": "wgsl"}, "language"), ({"real": "half"}, "real"), ({"values": []}, "values"),
-        ({"values": [1.0, math.nan]}, "value"), ({"language": "glsl", "values": [1e39]}, "value"),
-    ])
-    def test_embed_table_refuses_bad_input(self, kwargs: dict[str, Any], name: str) -> None:
-        arguments = {"language": "c", "name": "T", "values": [1.0], **kwargs}
-        with pytest.raises(ValueError, match=name):
-            embed_table(**arguments)
+    @pytest.mark.parametrize("language", ["c", "glsl", "hlsl"])
+    def test_tables_are_written_from_the_light_tables(self, sky: SkySH, exported: Exported, language: str) -> None:
+        """Each lights table of the data section (skysh/export/templates/c_like_data.h) is the LightTables' numbers,
+        float32 in the shaders and double in C, every value read back exactly."""
+        source, lights = exported(language, bands=3), export_tables(sky, 3).lights
+        dtype = np.float64 if language == "c" else np.float32
+        for name, values in (("SKYSH_SUN_TABLE", lights.sun_table), ("SKYSH_SUN_RGB", lights.rgb_from_xyz),
+                             ("SKYSH_SUN_TRIG", lights.windowed_trig()), ("SKYSH_GROUND", lights.ground_zonal)):
+            np.testing.assert_array_equal(parse_table(source, name, dtype), np.ravel(values).astype(dtype), err_msg=name)
+        defines = dict(re.findall(r"^#define (SKYSH_\w+) (.+)$", source, re.MULTILINE))
+        assert int(defines["SKYSH_SUN_DX"]) == lights.sun_degrees[0] and int(defines["SKYSH_SUN_DY"]) == lights.sun_degrees[1]
+        for name, key in (("SKYSH_KASTEN_A", "am_a"), ("SKYSH_KASTEN_NEG_C", "am_neg_c"), ("SKYSH_SUN_M0", "m0"),
+                          ("SKYSH_HF", "hf"), ("SKYSH_SUN_CLAMP", "clamp")):
+            assert dtype(defines[name]) == dtype(lights.constants[key]), name
 
-    def test_embed_table_text(self) -> None:
-        assert embed_table("c", "T", [0.5, 2.0], comment="x") == "/* x */\nstatic const skysh_real T[2] = {\n    0.5, 2.0\n};\n"
-        assert embed_table("glsl", "T", [0.1]) == f"const float T[1] = float[1](\n    {float32_literal(0.1)}\n);\n"
-        assert embed_table("js", "T", [[1.0, 2.0]]).startswith("const T = new Float64Array([\n    1.0, 2.0\n")
-
+    @pytest.mark.integration
     @pytest.mark.skipif(CC is None, reason=SKIP_NO_CC)
     def test_without_the_sun_table_the_sun_is_refused(self, sunless: tuple[SkySH, str], tool_runs: ToolRuns) -> None:
         """An in-memory SkyTable without the sun table exports; the sun is refused (-4), the ground still works."""
@@ -502,6 +511,7 @@ class TestGenerator:
         assert refused[0] == -4 and refused[1] == -4 and np.all(refused[2:] == 0.0)
         assert ground[0] == 0 and dc_relative_error(ground[8:].reshape(-1, 3), reference(reduced, pts[1], 3)) < DOUBLE_TOLERANCE
 
+    @pytest.mark.integration
     @pytest.mark.skipif(CC is None, reason=SKIP_NO_CC)
     def test_without_the_irradiance_table(self, sky: SkySH, bare: tuple[SkySH, str], tool_runs: ToolRuns) -> None:
         """An in-memory SkyTable without the irradiance table exports: by intent the old pipeline (as the runtime's
