@@ -69,9 +69,7 @@ def number_text(value: Any) -> str:
         return integer_text(value) if isinstance(value, int) else short_repr(value)
     except (TypeError, ValueError):
         return repr(value)
-    if x.is_integer() and abs(x) < 1e16:
-        return str(int(x))
-    return repr(x)
+    return str(int(x)) if x.is_integer() and abs(x) < 1e16 else repr(x)
 
 
 def interval_text(low: float, high: float, pi: bool = False) -> str:
@@ -128,9 +126,7 @@ def check_range(value: ArrayLike, name: str, low: float, high: float, unit: str 
     if array.size and (array.min() < low or array.max() > high):
         bad = array[(array < low) | (array > high)].ravel()[0]
         suffix = f" {unit}" if unit else ""
-        raise ValueError(
-            f"{name} must lie in [{low:g}, {high:g}]{suffix}, got {number_text(bad)}"
-        )
+        raise ValueError(f"{name} must lie in [{low:g}, {high:g}]{suffix}, got {number_text(bad)}")
     return array
 
 
@@ -161,10 +157,8 @@ def check_size(count: int, name: str, what: str = "") -> None:
     """Refuse work needing more than :data:`MAX_ARRAY_ELEMENTS` values in one array, naming ``name``."""
     if count > MAX_ARRAY_ELEMENTS:
         detail = f" ({what})" if what else ""
-        raise ValueError(
-            f"{name} is too large: the result would hold {count:,} values{detail}, more than the "
-            f"{MAX_ARRAY_ELEMENTS:,} (2 GiB of float64) skysh builds in one array; split the work"
-        )
+        raise ValueError(f"{name} is too large: the result would hold {count:,} values{detail}, more than the "
+                         f"{MAX_ARRAY_ELEMENTS:,} (2 GiB of float64) skysh builds in one array; split the work")
 
 
 def check_dirs(dirs: ArrayLike, name: str = "dirs", per_point: int = 3) -> NDArray[np.float64]:
@@ -221,9 +215,7 @@ def check_coeffs(coeffs: ArrayLike, name: str = "coeffs", high: int = 64, *, low
 
 def check_seed(seed: Any, name: str = "seed") -> int | None:
     """Return a random seed: None, or an integer in [0, 2**64 - 1] (not a bool)."""
-    if seed is None:
-        return None
-    return check_count(seed, name, 0, (1 << 64) - 1)
+    return None if seed is None else check_count(seed, name, 0, (1 << 64) - 1)
 
 
 def check_choice(value: str, name: str, choices: tuple[str, ...]) -> str:
@@ -239,9 +231,7 @@ def check_flag(value: object, name: str) -> bool:
     Truthiness is not accepted: ``"False"`` and ``nan`` are true in Python, so a flag
     given as text or a number would silently mean the opposite of what was meant.
     """
-    if type(value) is bool:
-        return value
-    if type(value) is np.bool_:
+    if type(value) is bool or type(value) is np.bool_:
         return bool(value)
     raise TypeError(f"{name} must be a bool (True or False), got {short_repr(value)} of type {type(value).__name__}")
 

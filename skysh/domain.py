@@ -67,10 +67,6 @@ _DEG: float = 180.0 / math.pi
 _KASTEN_A, _KASTEN_B, _KASTEN_NEG_C = KASTEN_COEFFICIENTS[0], KASTEN_COEFFICIENTS[1], -KASTEN_COEFFICIENTS[2]
 
 
-def _kasten_scalar(theta: float) -> float:
-    return 1.0 / (math.cos(theta) + _KASTEN_A * (_KASTEN_B - theta * _DEG) ** _KASTEN_NEG_C)
-
-
 @dataclass(frozen=True)
 class Variable:
     """
@@ -114,8 +110,7 @@ class Variable:
     def __post_init__(self) -> None:
         if self.transform not in TRANSFORMS:
             raise ValueError(f"transform must be one of {', '.join(TRANSFORMS)}, got {short_repr(self.transform)}")
-        low, high = self.interval
-        if not low < high:
+        if not self.interval[0] < self.interval[1]:
             raise ValueError(f"interval must be (low, high) with low < high, got {short_repr(self.interval)}")
         f0, f1 = (self.fitted_scalar(v) for v in self.interval)
         object.__setattr__(self, "fitted", (f0, f1))
@@ -163,7 +158,7 @@ class Variable:
         if self.transform == "log":
             return math.log(value)
         if self.transform == "kasten":
-            return _kasten_scalar(value)
+            return 1.0 / (math.cos(value) + _KASTEN_A * (_KASTEN_B - value * _DEG) ** _KASTEN_NEG_C)
         return value
 
     def fitted_value(self, value: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -249,9 +244,8 @@ def check_degrees(degrees: Any, name: str = "degrees") -> tuple[int, int]:
     try:
         d_theta, d_tau = degrees
     except (TypeError, ValueError):
-        raise ValueError(
-            f"{name} must be a pair of integers (d_theta, d_tau) in [0, {MAX_DEGREE}], got {short_repr(degrees)}"
-        ) from None
+        raise ValueError(f"{name} must be a pair of integers (d_theta, d_tau) in [0, {MAX_DEGREE}], "
+                         f"got {short_repr(degrees)}") from None
     return check_count(d_theta, f"{name}[0]", 0, MAX_DEGREE), check_count(d_tau, f"{name}[1]", 0, MAX_DEGREE)
 
 

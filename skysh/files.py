@@ -51,16 +51,10 @@ def package_dirs() -> tuple[Path, ...]:
         for an editable install (``pyproject.toml`` maps ``skysh.data`` there).
     """
     here = Path(__file__).resolve().parent
-    dirs = [here]
     checkout = here.parent
     if (checkout / "pyproject.toml").is_file() and (checkout / "data" / "__init__.py").is_file():
-        dirs.append((checkout / "data").resolve())
-    return tuple(dirs)
-
-
-def _lexical_target(path: Path) -> Path:
-    """``path`` with its folder resolved and its last component kept (a link there is replaced, not followed)."""
-    return Path(os.path.realpath(path.parent)) / path.name
+        return here, (checkout / "data").resolve()
+    return (here,)
 
 
 def check_output(path: str | os.PathLike[str], name: str = "path", may_replace: Path | None = None,
@@ -99,10 +93,11 @@ def check_output(path: str | os.PathLike[str], name: str = "path", may_replace: 
         raise TypeError(f"{name} must be a str or os.PathLike naming a file as text, got {type(path).__name__}")
     out = Path(path)
     _check_kind(path, out, name, folder)
-    target = _lexical_target(out)  # a link named here is replaced, never followed: where it points is not written
-    if may_replace is not None and target == Path(may_replace).resolve():
-        return out
-    _check_outside_package(target, out, name)
+    # The folder resolved, the last component kept: a link named here is replaced, never followed (where it points
+    # is not written).
+    target = Path(os.path.realpath(out.parent)) / out.name
+    if may_replace is None or target != Path(may_replace).resolve():
+        _check_outside_package(target, out, name)
     return out
 
 
@@ -117,14 +112,10 @@ def _check_kind(path: str | os.PathLike[str], out: Path, name: str, folder: bool
 
 
 def _check_outside_package(target: Path, out: Path, name: str) -> None:
-    """Refuse an output whose ``target`` (:func:`_lexical_target` of ``out``) lies inside :func:`package_dirs`."""
+    """Refuse an output whose ``target`` (``out``, its folder resolved) lies inside :func:`package_dirs`."""
     for package in package_dirs():
         if target == package or package in target.parents:
             raise ValueError(f"{name} {out} lies inside skysh's own files ({package}); write somewhere else")
-
-
-def _temporary(path: Path) -> Path:
-    return path.with_name(f".{path.name}.{os.getpid()}.{threading.get_ident()}.tmp")
 
 
 def write_together(files: Mapping[Path, bytes], parents: bool = False) -> list[Path]:
@@ -163,7 +154,7 @@ def write_together(files: Mapping[Path, bytes], parents: bool = False) -> list[P
         for path, data in files.items():
             if parents:
                 path.parent.mkdir(parents=True, exist_ok=True)
-            temporary = _temporary(path)
+            temporary = path.with_name(f".{path.name}.{os.getpid()}.{threading.get_ident()}.tmp")
             written.append((temporary, path))
             try:
                 with open(temporary, "xb") as handle:  # exclusive; mode from the umask
@@ -202,6 +193,4 @@ def write_atomic(path: str | os.PathLike[str], data: bytes, parents: bool = Fals
     OSError
         If the file cannot be written; the target is then as it was.
     """
-    target = Path(path)
-    write_together({target: data}, parents)
-    return target
+    return write_together({Path(path): data}, parents)[0]

@@ -22,8 +22,7 @@ import numpy as np
 
 from skysh.checks import check_choice, check_scalar
 
-__all__ = ["FLOAT32_MAX", "FLOAT64_MAX", "double_literal", "float32_literal", "real_literal", "suffixed_literal",
-           "number_rows"]
+__all__ = ["double_literal", "float32_literal", "real_literal", "suffixed_literal", "number_rows"]
 
 FLOAT32_MAX: float = float(np.finfo(np.float32).max)
 """Largest finite float32: beyond it a float32 literal would read back as inf."""

@@ -60,6 +60,7 @@ from skysh.checks import (
     check_range,
     check_scalar,
     check_size,
+    read_only,
     real_scalar,
     short_repr,
 )
@@ -126,10 +127,8 @@ def _terms(table: NDArray[np.float64], top: tuple[int, int], degrees: tuple[int,
 class _Plan:
     """Precomputed arithmetic of one (bands, gibbs) setting (or of the irradiance table)."""
 
-    __slots__ = (
-        "bands", "degrees", "half_table", "table_flat", "rot_index", "batch_rot_index", "lobe",
-        "split", "angle_map", "gather", "rotation",
-    )
+    __slots__ = ("bands", "degrees", "half_table", "table_flat", "rot_index", "batch_rot_index", "lobe", "split",
+                 "angle_map", "gather", "rotation")
 
     def __init__(self, sky_table: coefficient_file.SkyTable, bands: int, gibbs: bool, c10: bool = False,
                  rows_from: coefficient_file.NamedTable | None = None, lobe: bool = False) -> None:
@@ -138,23 +137,19 @@ class _Plan:
         the sky's. ``lobe``: fold the clamped-cosine factors A_l into them (irradiance out)."""
         self.bands = bands
         self.degrees = _plan_degrees(sky_table, bands, c10, rows_from)
-        k = bands * bands
-        k_half = bands * (bands + 1) // 2
-        lms = [sh.lm(i) for i in range(k)]
+        lms = [sh.lm(i) for i in range(bands * bands)]
         half = _half_rows(sky_table, bands, gibbs, c10, rows_from, lobe, self.degrees)
         # Scalar path: the m >= 0 table, contracted in theta then in turbidity.
         self.half_table = np.ascontiguousarray(half.reshape(self.degrees[0] + 1, -1))
         # Source (m >= 0 row, channel) and rotation factor of every output value;
         # rotation factors are laid out [cos(0 a) .. cos((N-1) a), sin(0 a) .. sin((N-1) a)].
-        position = {lm_: row for row, lm_ in enumerate(coefficient_file.zonal_half_layout(bands))}
-        source = np.array([position[(l, abs(m))] for l, m in lms], dtype=np.intp)
-        orders = np.array([m for _, m in lms])
-        self.rot_index = np.where(orders < 0, bands + np.abs(orders), np.abs(orders)).astype(np.intp)
+        source = np.array([l * (l + 1) // 2 + abs(m) for l, m in lms], dtype=np.intp)  # row of (l, |m|): zonal_half_layout
+        self.rot_index = np.array([bands - m if m < 0 else m for _, m in lms], dtype=np.intp)
         # Batch path: the full table (m < 0 columns repeat their m > 0 partners; the c_10 row last, unrotated).
-        columns = list(source) + ([k_half] if c10 else [])
+        columns = list(source) + ([bands * (bands + 1) // 2] if c10 else [])
         self.table_flat = np.ascontiguousarray(half[:, columns].reshape(half.shape[0], -1))
         self.batch_rot_index = np.concatenate([self.rot_index, np.zeros(len(columns) - len(source), np.intp)])
-        self.lobe = sh.cosine_lobe(bands)[np.array([l for l, _ in lms])][:, None]
+        self.lobe = sh.cosine_lobe(bands)[sh.band_of_index(bands)][:, None]
         # Scalar path: packed = cos(angle_map @ (acos x, acos y, phi, 1)), split into T(x), T(y), the rotation.
         dx, dy = self.degrees
         self.split = (dx + 1, dx + dy + 2)
@@ -162,11 +157,8 @@ class _Plan:
         # Output value (i, channel) = half[gather[i, channel]] * packed[rotation[i]].
         self.gather = 3 * source[:, None] + np.arange(3)
         self.rotation = np.repeat((dx + dy + 2 + self.rot_index)[:, None], 3, axis=1)  # (N^2, 3): no broadcast
-        for array in (
-            self.half_table, self.table_flat, self.rot_index, self.batch_rot_index, self.lobe,
-            self.angle_map, self.gather, self.rotation,
-        ):
-            array.flags.writeable = False
+        read_only(self.half_table, self.table_flat, self.rot_index, self.batch_rot_index, self.lobe, self.angle_map,
+                  self.gather, self.rotation)
 
 
 def _plan_degrees(sky_table: coefficient_file.SkyTable, bands: int, c10: bool,
@@ -180,19 +172,17 @@ def _plan_degrees(sky_table: coefficient_file.SkyTable, bands: int, c10: bool,
 def _half_rows(sky_table: coefficient_file.SkyTable, bands: int, gibbs: bool, c10: bool,
                rows_from: coefficient_file.NamedTable | None, lobe: bool, degrees: tuple[int, int]) -> NDArray[np.float64]:
     """(T, K_half (+ 1 with ``c10``), 3): a :class:`_Plan`'s m >= 0 rows in ``degrees``' layout, lobe and filter folded in."""
-    k_half = bands * (bands + 1) // 2
+    l_of, m_of = np.array(coefficient_file.zonal_half_layout(bands)).T
     rows = sky_table if rows_from is None else rows_from
-    half = _terms(rows.table, rows.max_degrees, degrees)[:, :k_half]  # (T, K_half, 3), m >= 0 rows
+    half = _terms(rows.table, rows.max_degrees, degrees)[:, : len(l_of)]  # (T, K_half, 3), m >= 0 rows
     if lobe:
-        half *= sh.cosine_lobe(bands)[[l for l, _ in coefficient_file.zonal_half_layout(bands)]][:, None]
+        half *= sh.cosine_lobe(bands)[l_of][:, None]
     if c10:  # (1, 0) is row 1 of the sky's layout (a 1-band file has none: zeros, the ground is refused)
         extra = _terms(sky_table.table, sky_table.max_degrees, degrees)[:, 1:2]
         half = np.concatenate([half, extra if sky_table.bands > 1 else np.zeros((half.shape[0], 1, 3))], axis=1)
     if gibbs:  # Habel eq. (5) folded into the zonal rows (the seed's own optimisation)
-        factors = gibbs_factors(bands)
-        for row, (l, m) in enumerate(coefficient_file.zonal_half_layout(bands)):
-            if m == 0:
-                half[:, row] *= factors[l]
+        zonal = np.flatnonzero(m_of == 0)
+        half[:, zonal] *= gibbs_factors(bands)[l_of[zonal]][:, None]
     return half
 
 
@@ -325,17 +315,17 @@ class SkySH:
         if sun or albedo is not None:
             frame = (ts, t, phi) if scalar else (sun_zenith, turbidity, sun_azimuth)
             return self._lit(frame, scalar, bands, gibbs, dering, colourspace, sun, albedo, table, irradiance)
-        plan = self._table_plans[irradiance] if table else None  # type: ignore[index]
+        plan = self._table_plans[irradiance] if table else self._plans[(bands, gibbs)]  # type: ignore[index]
         if scalar:
-            out = self._one(ts, t, phi, bands, gibbs, plan)  # type: ignore[arg-type]
-        else:
-            out = self._batch(sun_zenith, turbidity, sun_azimuth, bands, gibbs, plan)
+            out = self._one(ts, t, phi, plan)  # type: ignore[arg-type]
+        else:  # the array path: one design matrix, one matrix product, vectorised rotation
+            out = self._batch_sky(*self._frames(sun_zenith, turbidity, sun_azimuth), plan)
         if table:  # never negative (the certificate); a conversion mixing signs is deringed after it
             return self._table_colour(out, colourspace, dering, irradiance)
         if dering:
             out = _dering(out)
         if irradiance:
-            out = out * self._plans[(int(bands), True)].lobe
+            out = out * self._plans[(bands, True)].lobe
         if colourspace is not None and colourspace != self.colourspace:
             out = out @ self._colour_matrix(colourspace).T
         return out
@@ -353,17 +343,15 @@ class SkySH:
         on every call.
         """
         key = _plain_key(bands, gibbs, dering, irradiance, irradiance_table, sun, ground_albedo, colourspace)
-        if key is not None:
-            resolved = self._resolved.get(key)
-            if resolved is None:
-                resolved = Options.resolve(bands, gibbs, dering, irradiance, irradiance_table, sun, ground_albedo,
-                                           colourspace, has_table=self._table_plans is not None, max_bands=self.bands)
+        resolved = None if key is None else self._resolved.get(key)
+        if resolved is None:
+            resolved = Options.resolve(bands, gibbs, dering, irradiance, irradiance_table, sun, ground_albedo,
+                                       colourspace, has_table=self._table_plans is not None, max_bands=self.bands)
+            if key is not None:
                 if len(self._resolved) >= _RESOLVED_CACHE:  # e.g. an albedo animated per frame
                     self._resolved.clear()
                 self._resolved[key] = resolved
-            return resolved
-        return Options.resolve(bands, gibbs, dering, irradiance, irradiance_table, sun, ground_albedo, colourspace,
-                               has_table=self._table_plans is not None, max_bands=self.bands)
+        return resolved
 
     def _table_colour(self, out: NDArray, colourspace: str | None, dering: bool, irradiance: bool) -> NDArray:
         """The table's result in ``colourspace``, deringed after a conversion whose matrix mixes signs (``dering``)."""
@@ -372,20 +360,14 @@ class SkySH:
         out = out @ self._colour_matrix(colourspace).T
         return _dering(out, "radiance" if irradiance else "irradiance") if dering and self._mixing[colourspace] else out
 
-    def _one(self, ts: float, t: float, phi: float, bands: Any, gibbs: bool, plan: _Plan | None = None) -> NDArray:
-        """Scalar fast path: floats only, arithmetic on precomputed tables (``plan``: default the sky's)."""
+    def _one(self, ts: float, t: float, phi: float, plan: _Plan) -> NDArray:
+        """Scalar fast path: floats only, arithmetic on the precomputed tables of ``plan``."""
         phi = _check_frame(ts, t, phi)
-        if plan is None and type(bands) is int and type(gibbs) is bool:
-            plan = self._plans.get((bands, gibbs))
-        if plan is None:
-            check_bands(bands, high=self.bands)
-            plan = self._plans[(int(bands), bool(gibbs))]
         i1, i2 = plan.split
         # Every per-call factor in one vectorised cos: the Chebyshev terms T_k(x) =
         # cos(k acos x) of both variables and the rotation factors cos(m phi) and
         # sin(m phi) = cos(m phi - pi/2). Error <= k^2 eps, far below the fit's.
-        x = ts * _XS - _XH
-        y = math.log(t) * _YS - _YH
+        x, y = ts * _XS - _XH, math.log(t) * _YS - _YH
         # Clamp what rounding may push past +-1 at the domain's edges (x >= -1 holds exactly).
         angles = (math.acos(x if x < 1.0 else 1.0), math.acos(y if -1.0 < y < 1.0 else math.copysign(1.0, y)), phi, 1.0)
         packed = np.cos(np.dot(plan.angle_map, np.array(angles)))
@@ -396,30 +378,20 @@ class SkySH:
         out *= _luminance_scale(ts, t)
         return out
 
-    def _batch(self, sun_zenith: ArrayLike, turbidity: ArrayLike, sun_azimuth: ArrayLike, bands: Any, gibbs: bool,
-               plan: _Plan | None = None) -> NDArray:
-        """Array path: one design matrix, one matrix product, vectorised rotation (``plan``: default the sky's)."""
-        ts, t, phi, shape = self._frames(sun_zenith, turbidity, sun_azimuth)
-        if plan is None:
-            plan = self._plans[(check_bands(bands, high=self.bands), bool(gibbs))]
-        return self._batch_sky(ts, t, phi, shape, plan)
-
-    def _frames(self, sun_zenith: ArrayLike, turbidity: ArrayLike, sun_azimuth: ArrayLike) -> tuple:
+    def _frames(self, sun_zenith: ArrayLike, turbidity: ArrayLike,
+                sun_azimuth: ArrayLike) -> tuple[NDArray, NDArray, NDArray, tuple[int, ...]]:
         """Checked parameter arrays of a batch and their broadcast shape (not yet broadcast)."""
         ts, t = SKY.x.check_array(sun_zenith), SKY.y.check_array(turbidity)
         phi = check_range(sun_azimuth, "sun_azimuth", -np.inf, np.inf, unit="rad")
         try:
             shape = np.broadcast_shapes(ts.shape, t.shape, phi.shape)
         except ValueError:
-            raise ValueError(
-                f"sun_zenith, turbidity and sun_azimuth must broadcast together, got shapes {ts.shape}, {t.shape} "
-                f"and {phi.shape}"
-            ) from None
+            raise ValueError(f"sun_zenith, turbidity and sun_azimuth must broadcast together, got shapes {ts.shape}, "
+                             f"{t.shape} and {phi.shape}") from None
         return ts, t, phi, shape
 
     def _batch_sky(self, ts: NDArray, t: NDArray, phi: NDArray, shape: tuple[int, ...], plan: _Plan) -> NDArray:
         """(shape..., rows, 3) of checked arrays: rows N * N, plus the unfiltered c_10 for a ``c10`` plan."""
-        bands = plan.bands
         rows = plan.batch_rot_index.shape[0]
         size = math.prod(shape)
         largest = max((ts.size, "sun_zenith"), (t.size, "turbidity"), (phi.size, "sun_azimuth"))[1]
@@ -432,19 +404,16 @@ class SkySH:
         ty = poly.chebyshev_unchecked(y, plan.degrees[1]) * _luminance_scale(ts, t, np)[:, None]
         p = (tx[:, :, None] * ty[:, None, :]).reshape(ts.shape[0], -1)  # (n, T) design
         out = (p @ plan.table_flat).reshape(-1, rows, 3)  # the one matrix product
-        out *= np.take(_rotation_factors(phi, bands), plan.batch_rot_index, axis=1)[:, :, None]
+        out *= np.take(_rotation_factors(phi, plan.bands), plan.batch_rot_index, axis=1)[:, :, None]
         return out.reshape(shape + (rows, 3))
 
     def _colour_matrix(self, colourspace: str) -> NDArray[np.float64]:
         matrix = self._colour_matrices.get(colourspace)
         if matrix is None:
-            from skysh.model.preetham import (
-                rgb_from_xyz_matrix,  # colour-science loads here, on first use
-            )
+            from skysh.model.preetham import rgb_from_xyz_matrix  # colour-science loads here, on first use
 
-            source = rgb_from_xyz_matrix(self.colourspace)
-            matrix = rgb_from_xyz_matrix(colourspace) @ np.linalg.inv(source)
-            matrix.flags.writeable = False
+            matrix = rgb_from_xyz_matrix(colourspace) @ np.linalg.inv(rgb_from_xyz_matrix(self.colourspace))
+            read_only(matrix)
             self._mixing[colourspace] = bool(np.any(matrix < 0.0))
             self._colour_matrices[colourspace] = matrix
         return matrix
@@ -452,23 +421,20 @@ class SkySH:
     # ------------------------------------------------------------------ #
     # The sun and the ground (skysh.lighting.lights)
     # ------------------------------------------------------------------ #
-    def _lit_plan(self, bands: Any, gibbs: bool, table: bool = False, lobe: bool = False) -> lights.LitPlan:
-        """The :class:`skysh.lighting.lights.LitPlan` of a setting, built on first use (``lobe``: irradiance out, its
-        clamped-cosine factors folded into the tables: only for :meth:`skysh.lighting.lights.LitPlan.fused`)."""
-        plan = self._lit_plans.get((bands, gibbs, table, lobe)) if type(bands) is int else None
-        if plan is None:
-            bands = check_bands(bands, high=self.bands)
-            plan = self._lit_plans.get((bands, gibbs, table, lobe))
-            if plan is None:  # once per setting; a concurrent first call at worst builds it twice
-                sun = self.table.tables.get("sun")
-                matrix = None if self._sun is None else self._sun.rgb_from_xyz
-                rows_from = self.table.tables["irradiance"] if table else None
-                sky_plan = _Plan(self.table, bands, gibbs, c10=True, rows_from=rows_from, lobe=lobe)
-                plan = lights.LitPlan(sky_plan, sun, matrix, gibbs, lobe)
-                self._lit_plans[(bands, gibbs, table, lobe)] = plan
+    def _lit_plan(self, bands: int, gibbs: bool, table: bool = False, lobe: bool = False) -> lights.LitPlan:
+        """The :class:`skysh.lighting.lights.LitPlan` of a checked setting, built on first use (``lobe``: irradiance out,
+        its clamped-cosine factors folded into the tables: only for :meth:`skysh.lighting.lights.LitPlan.fused`)."""
+        plan = self._lit_plans.get((bands, gibbs, table, lobe))
+        if plan is None:  # once per setting; a concurrent first call at worst builds it twice
+            sun = self.table.tables.get("sun")
+            matrix = None if self._sun is None else self._sun.rgb_from_xyz
+            rows_from = self.table.tables["irradiance"] if table else None
+            sky_plan = _Plan(self.table, bands, gibbs, c10=True, rows_from=rows_from, lobe=lobe)
+            plan = lights.LitPlan(sky_plan, sun, matrix, gibbs, lobe)
+            self._lit_plans[(bands, gibbs, table, lobe)] = plan
         return plan
 
-    def _lit(self, frame: tuple, scalar: bool, bands: Any, gibbs: bool, dering: bool, colourspace: str | None,
+    def _lit(self, frame: tuple, scalar: bool, bands: int, gibbs: bool, dering: bool, colourspace: str | None,
              sun: bool, albedo: tuple[float, float, float] | None, table: bool = False,
              irradiance: bool = False) -> NDArray:
         """SH of sky + sun + ground, in the output colourspace (the order of :mod:`skysh.lighting.lights`); radiance,
@@ -489,15 +455,15 @@ class SkySH:
             phi = _check_frame(ts, t, phi)
             x, y = ts * _XS - _XH, math.log(t) * _YS - _YH
             if not dering_sky and not convert:  # the hot path: one fused evaluation, the lobe folded in
-                plan = self._lit_plans.get((bands, gibbs, table, irradiance)) if type(bands) is int else None
+                plan = self._lit_plans.get((bands, gibbs, table, irradiance))
                 plan = self._lit_plan(bands, gibbs, table, irradiance) if plan is None else plan
                 return plan.fused(ts, t, phi, x, y, sun, albedo)
             plan = self._lit_plan(bands, gibbs, table)
             sky, sun_sh, e_h = plan.parts(ts, t, phi, x, y, sun)
         else:
-            ts_a, t_a, phi_a, shape = self._frames(*frame)
+            frames = self._frames(*frame)
             plan = self._lit_plan(bands, gibbs, table)
-            sky, sun_sh, e_h = self._lit_batch(ts_a, t_a, phi_a, shape, plan, sun)
+            sky, sun_sh, e_h = self._lit_batch(*frames, plan, sun)
         return self._lit_finish(plan, sky, sun_sh, e_h, dering_sky, colourspace if convert else None, albedo,
                                 table and dering, irradiance)
 
@@ -576,16 +542,8 @@ class SkySH:
 
     # ------------------------------------------------------------------ #
     def radiance(
-        self,
-        dirs: ArrayLike,
-        sun_zenith: float,
-        turbidity: float,
-        sun_azimuth: float = 0.0,
-        bands: int = 3,
-        gibbs: bool | None = None,
-        colourspace: str | None = None,
-        sun: bool = False,
-        ground_albedo: ArrayLike = 0.0,
+        self, dirs: ArrayLike, sun_zenith: float, turbidity: float, sun_azimuth: float = 0.0, bands: int = 3,
+        gibbs: bool | None = None, colourspace: str | None = None, sun: bool = False, ground_albedo: ArrayLike = 0.0,
     ) -> NDArray[np.float64]:
         """Reconstructed radiance (cd/m^2, linear RGB) in the directions ``dirs`` (..., 3) -> (..., 3).
 
@@ -593,24 +551,13 @@ class SkySH:
         ``sun`` and ``ground_albedo`` these are); ``dirs`` is any batch of unit vectors,
         empty included (an empty result).
         """
-        d = self._frame_and_dirs(dirs, "dirs", bands, sun_zenith=sun_zenith, turbidity=turbidity, sun_azimuth=sun_azimuth)
-        c = self.coefficients(sun_zenith, turbidity, sun_azimuth, bands, gibbs, colourspace=colourspace, sun=sun,
-                              ground_albedo=ground_albedo)
-        return sh.basis_unchecked(d, int(bands)) @ c
+        return self._reconstruct(dirs, "dirs", sun_zenith, turbidity, sun_azimuth, bands, gibbs=gibbs,
+                                 colourspace=colourspace, sun=sun, ground_albedo=ground_albedo)
 
     def irradiance_at(
-        self,
-        normals: ArrayLike,
-        sun_zenith: float,
-        turbidity: float,
-        sun_azimuth: float = 0.0,
-        bands: int = 3,
-        gibbs: bool | None = None,
-        dering: bool | None = None,
-        colourspace: str | None = None,
-        sun: bool = False,
-        ground_albedo: ArrayLike = 0.0,
-        irradiance_table: bool | None = None,
+        self, normals: ArrayLike, sun_zenith: float, turbidity: float, sun_azimuth: float = 0.0, bands: int = 3,
+        gibbs: bool | None = None, dering: bool | None = None, colourspace: str | None = None, sun: bool = False,
+        ground_albedo: ArrayLike = 0.0, irradiance_table: bool | None = None,
     ) -> NDArray[np.float64]:
         """Reconstructed irradiance (cd/m^2 x sr = lux for luminance) on surfaces with ``normals`` (..., 3) -> (..., 3).
 
@@ -618,21 +565,20 @@ class SkySH:
         ``sun``, ``ground_albedo`` and ``irradiance_table`` these are: the certified table
         by default at 3 bands); ``normals`` is any batch of unit vectors, empty included.
         """
-        d = self._frame_and_dirs(
-            normals, "normals", bands, sun_zenith=sun_zenith, turbidity=turbidity, sun_azimuth=sun_azimuth
-        )
-        c = self.coefficients(sun_zenith, turbidity, sun_azimuth, bands, gibbs, dering=dering, irradiance=True,
-                              colourspace=colourspace, sun=sun, ground_albedo=ground_albedo,
-                              irradiance_table=irradiance_table)
-        return sh.basis_unchecked(d, int(bands)) @ c
+        return self._reconstruct(normals, "normals", sun_zenith, turbidity, sun_azimuth, bands, gibbs=gibbs,
+                                 dering=dering, irradiance=True, colourspace=colourspace, sun=sun,
+                                 ground_albedo=ground_albedo, irradiance_table=irradiance_table)
 
-    def _frame_and_dirs(self, dirs: ArrayLike, name: str, bands: Any, **sun: Any) -> NDArray[np.float64]:
-        """Checked directions of :meth:`radiance` / :meth:`irradiance_at`; the sun's parameters must be scalars."""
-        for key, value in sun.items():
+    def _reconstruct(self, dirs: ArrayLike, name: str, sun_zenith: Any, turbidity: Any, sun_azimuth: Any, bands: Any,
+                     **options: Any) -> NDArray[np.float64]:
+        """:meth:`radiance` / :meth:`irradiance_at`: the directions ``dirs`` (named ``name``) checked, the sun's
+        parameters refused unless scalars, then the basis there times :meth:`coefficients` with ``options``."""
+        for key, value in (("sun_zenith", sun_zenith), ("turbidity", turbidity), ("sun_azimuth", sun_azimuth)):
             if real_scalar(value) is None:
                 check_scalar(value, key)  # names the parameter: not a number, not finite, or an array
-        bands = check_bands(bands, high=self.bands)
-        return check_dirs(dirs, name, per_point=bands * bands)
+        d = check_dirs(dirs, name, per_point=check_bands(bands, high=self.bands) ** 2)
+        c = self.coefficients(sun_zenith, turbidity, sun_azimuth, bands, **options)
+        return sh.basis_unchecked(d, int(bands)) @ c
 
 
 def _plain_key(bands: Any, gibbs: Any, dering: Any, irradiance: Any, irradiance_table: Any, sun: Any, ground_albedo: Any,
@@ -640,9 +586,8 @@ def _plain_key(bands: Any, gibbs: Any, dering: Any, irradiance: Any, irradiance_
     """The cache key of :meth:`SkySH._options` for plain values (Python bools or None, an int, a float albedo or
     three, None or a str), else None: equal values of other types (1 for True, 3.0 for 3) must be checked."""
     albedo = ground_albedo if type(ground_albedo) is float else _albedo_key(ground_albedo)
-    if albedo is None or type(bands) is not int or type(irradiance) is not bool or type(sun) is not bool:
-        return None
-    if (gibbs is None or type(gibbs) is bool) and (dering is None or type(dering) is bool) \
+    if albedo is not None and type(bands) is int and type(irradiance) is bool and type(sun) is bool \
+            and (gibbs is None or type(gibbs) is bool) and (dering is None or type(dering) is bool) \
             and (irradiance_table is None or type(irradiance_table) is bool) \
             and (colourspace is None or type(colourspace) is str):
         return (bands, gibbs, dering, irradiance, irradiance_table, sun, albedo, colourspace)

@@ -33,7 +33,7 @@ from skysh.post import dering
 from skysh.sh import basis as sh
 from skysh.sh import minimum as shmin
 
-__all__ = ["LANGUAGES", "WORDS", "GUARDS", "dering_defines", "dering_source"]
+__all__ = ["dering_source"]
 
 LANGUAGES: tuple[str, ...] = ("c", "glsl", "hlsl")
 """Languages of :func:`dering_source`."""

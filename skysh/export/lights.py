@@ -65,7 +65,7 @@ from skysh.lighting import lights, sunlight
 from skysh.model import ground, solar
 from skysh.table import coefficient_file
 
-__all__ = ["BY_INTENT", "LightTables", "light_tables", "light_flags", "chebyshev_terms"]
+__all__ = []
 
 BY_INTENT: int = -1
 """The C and shader value of ``irradiance_table`` that means the runtime's default (None): by intent."""

@@ -31,7 +31,7 @@ from skysh.export.lights import LightTables, chebyshev_terms, light_tables
 from skysh.sh import basis as sh
 from skysh.table import coefficient_file
 
-__all__ = ["ExportTables", "export_tables", "ENGINE_ZERO", "ENGINE_UNIT", "EnginePlan", "engine_plan"]
+__all__ = []
 
 
 @dataclass(frozen=True)

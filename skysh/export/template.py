@@ -22,7 +22,7 @@ import re
 from functools import cache
 from pathlib import Path
 
-__all__ = ["TEMPLATE_DIR", "HOLE", "MAX_HOLES", "MACRO", "text", "holes", "fill", "defines"]
+__all__ = ["text"]
 
 TEMPLATE_DIR: Path = Path(__file__).with_name("templates")
 """The folder of the exports' source files (shipped as package data)."""

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from functools import cache
 from typing import NamedTuple
 
 import numpy as np
@@ -42,6 +43,7 @@ from skysh.checks import (
     check_cutoff,
     check_dirs,
     check_flag,
+    read_only,
 )
 from skysh.sh import basis as sh
 from skysh.sh import minimum as shmin
@@ -98,8 +100,7 @@ to -7.5 % of its mean (0.92 > sqrt(3)/2): the sky it is added to must cover that
 def sinc4_window(cutoff: float, bands: int = 3) -> NDArray[np.float64]:
     """Per-band factors (N,) of the seed's eq. (6), ``(sin(pi l / w) / (pi l / w))^4`` for
     l = 0 .. ``bands`` - 1, w = ``cutoff`` > 0 (``inf``: none); in [0, 1], 0 for l >= w."""
-    bands = check_bands(bands)
-    x = np.arange(bands) / check_cutoff(cutoff)
+    x = np.arange(check_bands(bands)) / check_cutoff(cutoff)
     return np.where(x < 1.0, np.sinc(x) ** 4, 0.0)
 
 
@@ -170,29 +171,24 @@ class _Rows(NamedTuple):
     s2: NDArray
 
 
-_ROWS: dict[tuple[int, str], _Rows] = {}
-"""Cache of the search's settings (:func:`window_table` reads its table)."""
-
-
+@cache
 def _rows(bands: int, target: str) -> _Rows:
-    if (bands, target) not in _ROWS:
-        sizes = SEED_WINDOW_SIZES if target == "irradiance" else RADIANCE_WINDOW_SIZES
-        a_min = linear_attenuation(sizes[-1], bands, target)
-        rows = np.array([sinc4_window(w, max(bands, 3)) for w in sizes])  # band 2 drives the ramp
-        rows[:, 1] *= 1.0 - (1.0 - a_min) * (1.0 - rows[:, 2]) / (1.0 - rows[-1, 2])
-        l_of = sh.band_of_index(bands)
-        pad = np.where(np.arange(3) < bands, rows[:, :3], 0.0)
-        kernel = KERNELS[target][l_of]
-        quadratic = bands <= 3 or (bands == 4 and target == "irradiance")  # A_3 = 0: a 3-band target
-        k = min(bands, 3) ** 2
-        form = kernel[:k, None] * shmin.FORM_MAP[:k] if quadratic else np.zeros((0, 13))
-        out = _Rows(np.ascontiguousarray(rows[:, :bands]), rows[:, l_of, None], rows[:, l_of] * kernel,
-                    np.ascontiguousarray(form[:, :4]), np.ascontiguousarray(form[:, 4:]), pad[:, 1:2], pad[:, 1:2] ** 2,
-                    pad[:, 2:3])
-        for array in out:
-            array.flags.writeable = False
-        _ROWS[(bands, target)] = out
-    return _ROWS[(bands, target)]
+    """The search's setting of ``bands`` and ``target``, built once (:func:`window_table` reads its table)."""
+    sizes = SEED_WINDOW_SIZES if target == "irradiance" else RADIANCE_WINDOW_SIZES
+    a_min = linear_attenuation(sizes[-1], bands, target)
+    rows = np.array([sinc4_window(w, max(bands, 3)) for w in sizes])  # band 2 drives the ramp
+    rows[:, 1] *= 1.0 - (1.0 - a_min) * (1.0 - rows[:, 2]) / (1.0 - rows[-1, 2])
+    l_of = sh.band_of_index(bands)
+    pad = np.where(np.arange(3) < bands, rows[:, :3], 0.0)
+    kernel = KERNELS[target][l_of]
+    quadratic = bands <= 3 or (bands == 4 and target == "irradiance")  # A_3 = 0: a 3-band target
+    k = min(bands, 3) ** 2
+    form = kernel[:k, None] * shmin.FORM_MAP[:k] if quadratic else np.zeros((0, 13))
+    out = _Rows(np.ascontiguousarray(rows[:, :bands]), rows[:, l_of, None], rows[:, l_of] * kernel,
+                np.ascontiguousarray(form[:, :4]), np.ascontiguousarray(form[:, 4:]), pad[:, 1:2], pad[:, 1:2] ** 2,
+                pad[:, 2:3])
+    read_only(*out)
+    return out
 
 
 def window_table(bands: int = 3, target: str = "irradiance") -> NDArray[np.float64]:
@@ -407,5 +403,5 @@ def directional_light_sh(
                          f"{'s' if w.shape[0] > 1 else ''} (one per band; give a longer window for more bands), got {bands}")
     if col.ndim == 0:
         raise ValueError(f"colour must have shape (C,) or (..., C), got {col.shape}")
-    y = sh.basis(d, bands) * w[np.repeat(np.arange(bands), 2 * np.arange(bands) + 1)]
+    y = sh.basis(d, bands) * w[sh.band_of_index(bands)]
     return y[..., :, None] * col[..., None, :]

@@ -50,9 +50,7 @@ from skysh.sh import basis as sh
 __all__ = ["L0_SCALE", "L1_SCALE", "L2_OFF_DIAGONAL_SCALE", "L2_ZZ_SCALE", "L2_XX_MINUS_YY_SCALE",
     "ANTIPODAL_FACTOR", "GEOMERICS_EXPONENT_ENDS", "MAX_BANDS", "radiance", "irradiance", "irradiance_l1_nonlinear"]
 
-_SQRT_PI: float = math.sqrt(math.pi)
-
-L0_SCALE: float = 1.0 / (2.0 * _SQRT_PI)
+L0_SCALE: float = sh.Y00
 """R0 = L0_SCALE c0: (1 / 4 pi) integral R = c0 / (4 pi Y00), Y00 = 1 / (2 sqrt(pi))."""
 
 L1_SCALE: float = 1.0 / (2.0 * math.sqrt(3.0 * math.pi))
@@ -135,22 +133,17 @@ def _to_normalised(c: NDArray) -> tuple[NDArray, NDArray, NDArray]:
     r0 = L0_SCALE * c[..., 0, :]
     r1 = np.zeros(r0.shape + (3,))
     r2 = np.zeros(r0.shape + (3, 3))
-    if k >= 4:
-        r1[..., 0] = -L1_SCALE * c[..., 3, :]
-        r1[..., 1] = -L1_SCALE * c[..., 1, :]
-        r1[..., 2] = L1_SCALE * c[..., 2, :]
+    if k >= 4:  # R1 = L1_SCALE (-c3, -c1, c2)
+        r1[...] = L1_SCALE * np.stack([-c[..., 3, :], -c[..., 1, :], c[..., 2, :]], axis=-1)
     if k >= 9:
-        xy = L2_OFF_DIAGONAL_SCALE * c[..., 4, :]
-        yz = -L2_OFF_DIAGONAL_SCALE * c[..., 5, :]
-        xz = -L2_OFF_DIAGONAL_SCALE * c[..., 7, :]
         zz = L2_ZZ_SCALE * c[..., 6, :]
         diff = L2_XX_MINUS_YY_SCALE * c[..., 8, :]
         r2[..., 0, 0] = 0.5 * (diff - zz)
         r2[..., 1, 1] = -0.5 * (diff + zz)
         r2[..., 2, 2] = zz
-        r2[..., 0, 1] = r2[..., 1, 0] = xy
-        r2[..., 1, 2] = r2[..., 2, 1] = yz
-        r2[..., 0, 2] = r2[..., 2, 0] = xz
+        r2[..., 0, 1] = r2[..., 1, 0] = L2_OFF_DIAGONAL_SCALE * c[..., 4, :]
+        r2[..., 1, 2] = r2[..., 2, 1] = -L2_OFF_DIAGONAL_SCALE * c[..., 5, :]
+        r2[..., 0, 2] = r2[..., 2, 0] = -L2_OFF_DIAGONAL_SCALE * c[..., 7, :]
     return r0, r1, r2
 
 
@@ -198,9 +191,7 @@ def from_normalised(R0: ArrayLike, R1: ArrayLike | None = None, R2: ArrayLike | 
             asym = np.abs(r2 - np.swapaxes(r2, -1, -2)).max(axis=(-1, -2))
             trace = np.abs(np.trace(r2, axis1=-2, axis2=-1))
             if np.any(asym > SYMMETRY_TOLERANCE * scale) or np.any(trace > SYMMETRY_TOLERANCE * scale):
-                raise ValueError(
-                    f"R2 must be symmetric and traceless (within {SYMMETRY_TOLERANCE:g} of its largest entry)"
-                )
+                raise ValueError(f"R2 must be symmetric and traceless (within {SYMMETRY_TOLERANCE:g} of its largest entry)")
         rows[4] = r2[..., 0, 1] / L2_OFF_DIAGONAL_SCALE
         rows[5] = -r2[..., 1, 2] / L2_OFF_DIAGONAL_SCALE
         rows[6] = r2[..., 2, 2] / L2_ZZ_SCALE
@@ -212,22 +203,22 @@ def from_normalised(R0: ArrayLike, R1: ArrayLike | None = None, R2: ArrayLike | 
 # --------------------------------------------------------------------------- #
 # Reconstruction
 # --------------------------------------------------------------------------- #
-def _batch_shape(c: NDArray, d: NDArray, name: str) -> tuple[int, ...]:
-    """The broadcast batch shape of coefficients (..., K, C) and directions (..., 3), size-checked."""
+def _checked(coeffs: ArrayLike, dirs: ArrayLike, name: str) -> tuple[NDArray, bool, NDArray]:
+    """Checked coefficients (..., K, C), whether they came as one (K,) vector, and directions (..., 3) named
+    ``name``, whose batch axes broadcast together (the broadcast result size-checked)."""
+    c, vector, _ = check_coeffs(coeffs, high=MAX_BANDS)
+    d = check_dirs(dirs, name)
     try:
         shape = np.broadcast_shapes(c.shape[:-2], d.shape[:-1])
     except ValueError:
-        raise ValueError(
-            f"the batch axes of coeffs {c.shape[:-2]} and of {name} {d.shape[:-1]} must broadcast together"
-        ) from None
+        raise ValueError(f"the batch axes of coeffs {c.shape[:-2]} and of {name} {d.shape[:-1]} "
+                         "must broadcast together") from None
     check_size(int(np.prod(shape, dtype=np.float64)) * c.shape[-1] * 9, name, "the broadcast result")
-    return shape
+    return c, vector, d
 
 
 def _reconstruct(coeffs: ArrayLike, dirs: ArrayLike, factors: tuple[float, float, float], name: str) -> NDArray:
-    c, vector, _ = check_coeffs(coeffs, high=MAX_BANDS)
-    d = check_dirs(dirs, name)
-    _batch_shape(c, d, name)
+    c, vector, d = _checked(coeffs, dirs, name)
     r0, r1, r2 = _to_normalised(c)
     w = d[..., None, :]  # (..., 1, 3) against the channel axis
     out = r0 + factors[1] * np.sum(r1 * w, axis=-1)
@@ -343,9 +334,7 @@ def irradiance_l1_nonlinear(coeffs: ArrayLike, normals: ArrayLike) -> NDArray[np
     light from one hemisphere, as a sky, it lights normals facing away from it:
     docs/hazel.md works the uniform upper hemisphere, where the linear L1 is exact.
     """
-    c, vector, _ = check_coeffs(coeffs, high=MAX_BANDS)
-    n = check_dirs(normals, "normals")
-    _batch_shape(c, n, "normals")
+    c, vector, n = _checked(coeffs, normals, "normals")
     g = geomerics_parameters(c)
     q = np.clip(0.5 + 0.5 * np.sum(g["direction"] * n[..., None, :], axis=-1), 0.0, 1.0)
     a, p = g["a"], g["p"]

@@ -57,7 +57,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from skysh.checks import as_float_array, check_choice, check_coeffs, check_count, check_flag, short_repr
+from skysh.checks import as_float_array, check_choice, check_coeffs, check_count, check_flag, read_only, short_repr
 from skysh.sh import basis as sh
 
 __all__ = ["DEFAULT_BITS", "PRIOR_BOUNDS", "TIGHT_BOUNDS", "IRRADIANCE_FACTORS", "TABLE3_THETA_NODES", "bounds",
@@ -84,21 +84,17 @@ _M_OF_K: tuple[int, ...] = tuple(sh.lm(k)[1] for k in range(1, N_COEFFS))
 PRIOR_BOUNDS: NDArray[np.float64] = np.array([math.sqrt(2 * l + 1) for l in _L_OF_K])
 """Prior bound of |c_k / c_0| for k = 1..8: sqrt(2 l + 1) = Y_l0(+Z) / Y_00 (seed eq. in 2.2)."""
 
-TIGHT_BOUNDS: NDArray[np.float64] = np.array(
-    [
-        # Non-zonal l = 2: max |Y / Y_00| = sqrt(15) max|x y| = sqrt(15) max|x z| = (sqrt(15) / 2) max|x^2 - y^2|,
-        # with |x y| <= (x^2 + y^2) / 2 <= 1/2 and |x^2 - y^2| <= 1 on the sphere: sqrt(15) / 2.
-        math.sqrt(15.0) * 0.5 if (l == 2 and m != 0) else math.sqrt(2 * l + 1)
-        for l, m in zip(_L_OF_K, _M_OF_K)
-    ]
-)
+TIGHT_BOUNDS: NDArray[np.float64] = np.array([
+    # Non-zonal l = 2: max |Y / Y_00| = sqrt(15) max|x y| = sqrt(15) max|x z| = (sqrt(15) / 2) max|x^2 - y^2|,
+    # with |x y| <= (x^2 + y^2) / 2 <= 1/2 and |x^2 - y^2| <= 1 on the sphere: sqrt(15) / 2.
+    math.sqrt(15.0) * 0.5 if (l == 2 and m != 0) else math.sqrt(2 * l + 1) for l, m in zip(_L_OF_K, _M_OF_K)
+])
 """Tight bound of |c_k / c_0| for k = 1..8: sqrt(15)/2 for (2, +-1), (2, +-2), else the prior (seed 3.2)."""
 
 IRRADIANCE_FACTORS: NDArray[np.float64] = np.array([sh.cosine_lobe(3)[l] / sh.cosine_lobe(3)[0] for l in _L_OF_K])
 """A_l / A_0 for k = 1..8 (2/3 for l = 1, 1/4 for l = 2): the seed's ``isIrrad`` factors."""
 
-for _array in (PRIOR_BOUNDS, TIGHT_BOUNDS, IRRADIANCE_FACTORS):
-    _array.flags.writeable = False
+read_only(PRIOR_BOUNDS, TIGHT_BOUNDS, IRRADIANCE_FACTORS)
 
 CLAMP_TOLERANCE: float = 1e-9
 """Relative overshoot of |c_k / (c_0 bound)| above 1 that is clamped silently: a delta light at a
@@ -144,11 +140,8 @@ def _layout(bits: int) -> tuple[int, int]:
 @cache
 def _used_bits(bits: int) -> NDArray[np.uint64]:
     """Per word, the mask of the bits that hold a field (the rest is zero padding)."""
-    per_word, n_words = _layout(bits)
-    used = np.zeros(n_words, dtype=np.uint64)
-    for j in range(N_COEFFS - 1):  # the 8 fields of the layout, not data
-        used[j // per_word] |= np.uint64(((1 << bits) - 1) << (bits * (j % per_word)))
-    used.flags.writeable = False
+    used = _pack(np.full(N_COEFFS - 1, (1 << bits) - 1, dtype=np.uint64), bits).astype(np.uint64)  # every field all ones
+    read_only(used)
     return used
 
 
@@ -219,8 +212,7 @@ def ratios(coeffs: ArrayLike, bound: str = "tight", irradiance: bool = False) ->
         such SH come from no non-negative function; :func:`compress` clamps them).
     """
     irradiance = check_flag(irradiance, "irradiance")
-    c = _codec_coeffs(coeffs)
-    return _ratios(c, bounds(bound, bool(irradiance)))
+    return _ratios(_codec_coeffs(coeffs), bounds(bound, irradiance))
 
 
 def _ratios(c: NDArray, scale: NDArray) -> NDArray:
@@ -236,11 +228,7 @@ def _ratios(c: NDArray, scale: NDArray) -> NDArray:
 # The codec
 # --------------------------------------------------------------------------- #
 def compress(
-    coeffs: ArrayLike,
-    bits: int = DEFAULT_BITS,
-    bound: str = "tight",
-    sqrt: bool = False,
-    irradiance: bool = False,
+    coeffs: ArrayLike, bits: int = DEFAULT_BITS, bound: str = "tight", sqrt: bool = False, irradiance: bool = False,
 ) -> tuple[NDArray[np.float64], NDArray[np.uint32]]:
     """
     Compress 9-coefficient SH: DC as a float, the rest as ``bits``-bit codes (Listing 1).
@@ -296,14 +284,12 @@ def compress(
     sqrt, irradiance = check_flag(sqrt, "sqrt"), check_flag(irradiance, "irradiance")
     c = _codec_coeffs(coeffs)
     bits = _check_bits(bits)
-    scale = bounds(bound, bool(irradiance))
-    v = _clamped(_ratios(c, scale))
+    v = _clamped(_ratios(c, bounds(bound, irradiance)))
     if sqrt:
         v = np.sign(v) * np.sqrt(np.abs(v))
     bv = float((1 << (bits - 1)) - 1)
     codes = np.floor((bv + 0.5) + v * bv).astype(np.uint64)  # 0 .. 2 bv, round to nearest (Listing 1)
-    words = _pack(np.moveaxis(codes, -2, -1), bits)  # (..., C, 8) -> (..., C, W)
-    return c[..., 0, :].copy(), words
+    return c[..., 0, :].copy(), _pack(np.moveaxis(codes, -2, -1), bits)  # words: (..., C, 8) -> (..., C, W)
 
 
 def _clamped(v: NDArray) -> NDArray:
@@ -312,14 +298,9 @@ def _clamped(v: NDArray) -> NDArray:
     over = ~(np.abs(v) <= 1.0 + CLAMP_TOLERANCE)
     if over.any():
         worst = float(np.max(np.abs(v[over])))
-        warnings.warn(
-            QuantizationClampWarning(
-                f"{int(over.sum())} of {v.size} SH coefficients exceed their bound "
-                f"(worst |c_k / (c_0 bound)| = {worst:.6g}); clamped to [-1, 1]. "
-                "No non-negative function has such SH."
-            ),
-            stacklevel=3,
-        )
+        warnings.warn(QuantizationClampWarning(f"{int(over.sum())} of {v.size} SH coefficients exceed their bound "
+                                               f"(worst |c_k / (c_0 bound)| = {worst:.6g}); clamped to [-1, 1]. "
+                                               "No non-negative function has such SH."), stacklevel=3)
     return np.clip(v, -1.0, 1.0)
 
 
@@ -341,11 +322,7 @@ def _unpack(words: NDArray[np.uint64], bits: int) -> NDArray[np.uint64]:
 
 
 def decompress(
-    dc: ArrayLike,
-    words: ArrayLike,
-    bits: int = DEFAULT_BITS,
-    bound: str = "tight",
-    sqrt: bool = False,
+    dc: ArrayLike, words: ArrayLike, bits: int = DEFAULT_BITS, bound: str = "tight", sqrt: bool = False,
     irradiance: bool = False,
 ) -> NDArray[np.float64]:
     """
@@ -381,7 +358,7 @@ def decompress(
     sqrt, irradiance = check_flag(sqrt, "sqrt"), check_flag(irradiance, "irradiance")
     d = as_float_array(dc, "dc")
     bits = _check_bits(bits)
-    scale = bounds(bound, bool(irradiance))
+    scale = bounds(bound, irradiance)
     _per_word, n_words = _layout(bits)
     try:
         w = np.asarray(words)
@@ -391,16 +368,14 @@ def decompress(
     if w.dtype.kind not in "ui":
         raise ValueError(f"words must be integers in [0, 2^32 - 1], got dtype {w.dtype}")
     if d.ndim < 1 or w.shape != d.shape + (n_words,):
-        raise ValueError(
-            f"words must have shape dc.shape + ({n_words},) for bits={bits}, got dc {d.shape} and words {w.shape}"
-        )
+        raise ValueError(f"words must have shape dc.shape + ({n_words},) for bits={bits}, "
+                         f"got dc {d.shape} and words {w.shape}")
     if w.size and (w.min() < 0 or w.max() > 0xFFFFFFFF):
         raise ValueError("words must be integers in [0, 2^32 - 1]")
     w = w.astype(np.uint64)
-    fields = _unpack(w, bits)
     if np.any(w & ~_used_bits(bits)):
         raise ValueError(f"words have non-zero padding bits: they were not packed with bits={bits}")
-    codes = fields[..., : N_COEFFS - 1]
+    codes = _unpack(w, bits)[..., : N_COEFFS - 1]
     top = (1 << bits) - 2
     if codes.size and codes.max() > top:
         raise ValueError(f"words hold the code {(1 << bits) - 1}, outside the valid codes [0, {top}] for bits={bits}")
@@ -434,11 +409,7 @@ def _error_norms(delta: NDArray, mean: NDArray, weighted_basis: NDArray, basis_t
     return {"L1": l1, "L2": l2, "RMSE": l2 / math.sqrt(rel.shape[0] * rel.shape[2])}
 
 
-def table3_errors(
-    coeffs: ArrayLike,
-    bits: int = DEFAULT_BITS,
-    n_theta: int = TABLE3_THETA_NODES,
-) -> dict[str, Any]:
+def table3_errors(coeffs: ArrayLike, bits: int = DEFAULT_BITS, n_theta: int = TABLE3_THETA_NODES) -> dict[str, Any]:
     """
     The seed's Table 3 for a batch of SH: compression error, prior versus tight bound.
 
@@ -480,22 +451,19 @@ def table3_errors(
     if c.shape[0] == 0:
         raise ValueError("coeffs must hold at least one probe")
     if not np.all(c[:, 0, :] > 0.0):
-        raise ValueError(
-            "coeffs must have a positive DC coefficient in every probe and channel (non-negative functions)"
-        )
+        raise ValueError("coeffs must have a positive DC coefficient in every probe and channel (non-negative functions)")
     n_theta = check_count(n_theta, "n_theta", 3, sh.MAX_GAUSS_NODES)
     bits = _check_bits(bits)
     dirs, weights = sh.quadrature_rule(n_theta)
     basis_t = sh.basis(dirs, 3)  # (M, 9)
     weighted = weights / (4.0 * math.pi)
-    y00 = 0.5 / math.sqrt(math.pi)
     rows: list[dict[str, Any]] = []
     for quantity in ("radiance", "irradiance"):
-        original = sh.irradiance(c) if quantity == "irradiance" else c
-        mean = original[:, 0, :] * y00
+        is_irr = quantity == "irradiance"
+        original = sh.irradiance(c) if is_irr else c
+        mean = original[:, 0, :] * sh.Y00
         for use_sqrt in (False, True):
             for bound in BOUND_NAMES:
-                is_irr = quantity == "irradiance"
                 clamped = int(np.sum(~(np.abs(ratios(original, bound, is_irr)) <= 1.0 + CLAMP_TOLERANCE)))
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore", QuantizationClampWarning)  # counted in ``clamped``
@@ -504,11 +472,10 @@ def table3_errors(
                 norms = _error_norms(decoded - original, mean, weighted, basis_t)
                 rows.append({"quantity": quantity, "sqrt": use_sqrt, "bound": bound, **norms, "clamped": clamped})
     changes: list[dict[str, Any]] = []
-    for quantity in ("radiance", "irradiance"):
-        for use_sqrt in (False, True):
-            pair = {r["bound"]: r for r in rows if r["quantity"] == quantity and r["sqrt"] == use_sqrt}
-            for metric in ("L1", "L2", "RMSE"):
-                prior, tight = pair["prior"][metric], pair["tight"][metric]
-                change = 100.0 * (prior - tight) / prior if prior > 0.0 else 0.0
-                changes.append({"quantity": quantity, "sqrt": use_sqrt, "metric": metric, "change_percent": change})
+    for prior_row, tight_row in zip(rows[::2], rows[1::2]):  # one quantity and sqrt, bounds in BOUND_NAMES order
+        setting = {"quantity": prior_row["quantity"], "sqrt": prior_row["sqrt"]}
+        for metric in ("L1", "L2", "RMSE"):
+            prior, tight = prior_row[metric], tight_row[metric]
+            change = 100.0 * (prior - tight) / prior if prior > 0.0 else 0.0
+            changes.append({**setting, "metric": metric, "change_percent": change})
     return {"rows": rows, "changes": changes, "probes": int(c.shape[0]), "channels": int(c.shape[2]), "bits": bits}

@@ -173,8 +173,7 @@ def _recurrence(bands: int) -> BasisRecurrence:
         # Q[m,m] / Q[m-1,m-1] = -(2m - 1) * sqrt((2m+1)/(2m) / (2m-1)^2 ...) in closed form:
         # N_mm (2m-1)!! / (N_{m-1,m-1} (2m-3)!!) = -sqrt((2m + 1) / (2m)), and sqrt(2) once at m = 1.
         diag[m] = -diag[m - 1] * math.sqrt((2 * m + 1) / (2 * m)) * (math.sqrt(2.0) if m == 1 else 1.0)
-    a = np.zeros((bands, bands))
-    b = np.zeros((bands, bands))
+    a, b = np.zeros((bands, bands)), np.zeros((bands, bands))
     for l in range(2, bands):
         for m in range(0, l - 1):
             a[l, m] = math.sqrt((4 * l * l - 1) / (l * l - m * m))
@@ -204,10 +203,9 @@ def _basis_block(x: NDArray, y: NDArray, z: NDArray, bands: int, out: NDArray, w
     """One block of :func:`_basis_kn`, in place, reusing the ``work`` buffers."""
     rec = _recurrence(bands)
     b = x.shape[0]
-    cm, sm, qa, qb, qc, scratch = (w[:, :b] for w in work)
+    cm, sm, q2, q1, q, scratch = (w[:, :b] for w in work)
     # cos / sin of m phi times sin(theta)^m, i.e. Re / Im of (x + i y)^m.
-    cm[0] = 1.0
-    sm[0] = 0.0
+    cm[0], sm[0] = 1.0, 0.0
     tmp = scratch[0]
     for m in range(1, bands):
         np.multiply(x, cm[m - 1], out=cm[m])
@@ -217,7 +215,6 @@ def _basis_block(x: NDArray, y: NDArray, z: NDArray, bands: int, out: NDArray, w
         np.multiply(y, cm[m - 1], out=tmp)
         sm[m] += tmp
     # Rolling rows: q2 = Q[l-2, :], q1 = Q[l-1, :], q = Q[l, :], each indexed [m, point].
-    q2, q1, q = qa, qb, qc
     for l in range(bands):
         if l >= 2:
             k = l - 1
@@ -275,8 +272,7 @@ def basis(dirs: ArrayLike, bands: int) -> NDArray[np.float64]:
 def basis_unchecked(d: NDArray[np.float64], bands: int) -> NDArray[np.float64]:
     """:func:`basis` without its checks, for a per-frame path that checked once: ``d`` a float64 array
     (..., 3) of unit vectors, ``bands`` an int in [1, 64]. Bad input gives wrong numbers, not an error."""
-    flat = d.reshape(-1, 3)
-    x, y, z = np.ascontiguousarray(flat.T)  # contiguous coordinate rows: the recurrence runs on them
+    x, y, z = np.ascontiguousarray(d.reshape(-1, 3).T)  # contiguous coordinate rows: the recurrence runs on them
     out = _basis_kn(x, y, z, bands)
     return np.moveaxis(out.reshape((bands * bands,) + d.shape[:-1]), 0, -1)
 
@@ -288,9 +284,8 @@ def _coeff_bands(coeffs: NDArray, name: str = "coeffs", axis: int = 0) -> int:
     k = coeffs.shape[axis] if coeffs.ndim else 0
     bands = math.isqrt(k)
     if k == 0 or bands * bands != k or bands > MAX_BANDS:
-        raise ValueError(
-            f"{name} must have a coefficient axis of length N**2 (1, 4, 9, ..., {MAX_BANDS}**2), got shape {coeffs.shape}"
-        )
+        raise ValueError(f"{name} must have a coefficient axis of length N**2 (1, 4, 9, ..., {MAX_BANDS}**2), "
+                         f"got shape {coeffs.shape}")
     return bands
 
 
@@ -344,6 +339,12 @@ def _gauss_legendre(n: int) -> tuple[NDArray, NDArray]:
     return nodes, weights
 
 
+def _unit_vectors(z: NDArray, phi: NDArray) -> NDArray:
+    """The unit vectors (..., 3) of heights ``z`` in [-1, 1] and azimuths ``phi`` (radians), broadcast together."""
+    s = np.sqrt(np.maximum(0.0, 1.0 - z * z))
+    return np.stack(np.broadcast_arrays(s * np.cos(phi), s * np.sin(phi), z), axis=-1)
+
+
 def quadrature_rule(n_theta: int, hemisphere: bool = False) -> tuple[NDArray, NDArray]:
     """
     Product Gauss-Legendre (in cos theta) x uniform azimuth rule on the sphere.
@@ -376,10 +377,8 @@ def _quadrature_rule(n_theta: int, hemisphere: bool) -> tuple[NDArray, NDArray]:
         z, wz = 0.5 * (z + 1.0), 0.5 * wz
     n_phi = 2 * n_theta
     phi = (np.arange(n_phi) + 0.5) * (2.0 * np.pi / n_phi)
-    s = np.sqrt(np.maximum(0.0, 1.0 - z * z))
-    dirs = np.stack(np.broadcast_arrays(s[:, None] * np.cos(phi), s[:, None] * np.sin(phi), z[:, None]), axis=-1)
+    dirs = _unit_vectors(z[:, None], phi).reshape(-1, 3)
     weights = np.repeat(wz * (2.0 * np.pi / n_phi), n_phi)
-    dirs = dirs.reshape(-1, 3)
     read_only(dirs, weights)
     return dirs, weights
 
@@ -395,10 +394,7 @@ def _quadrature_basis(n_theta: int, hemisphere: bool, bands: int) -> tuple[NDArr
 
 def _uniform_dirs(u: NDArray, v: NDArray, hemisphere: bool) -> NDArray:
     """Area-preserving map of the unit square to the sphere (or upper hemisphere)."""
-    z = 1.0 - u if hemisphere else 1.0 - 2.0 * u
-    s = np.sqrt(np.maximum(0.0, 1.0 - z * z))
-    phi = 2.0 * np.pi * v
-    return np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=-1)
+    return _unit_vectors(1.0 - u if hemisphere else 1.0 - 2.0 * u, 2.0 * np.pi * v)
 
 
 def _sample_square(method: str, n: int, seed: int | None) -> NDArray:
@@ -408,8 +404,7 @@ def _sample_square(method: str, n: int, seed: int | None) -> NDArray:
         return rng.random((n, 2))
     if method == "stratified":
         k = max(1, math.isqrt(n))
-        a, b = np.meshgrid(np.arange(k), np.arange(k), indexing="ij")
-        cells = np.stack([a.ravel(), b.ravel()], axis=-1)
+        cells = np.stack(np.meshgrid(np.arange(k), np.arange(k), indexing="ij"), axis=-1).reshape(-1, 2)
         return (cells + rng.random((k * k, 2))) / k
     from scipy.stats import qmc  # scipy is a runtime dependency; imported here to keep import skysh light
 
@@ -418,12 +413,8 @@ def _sample_square(method: str, n: int, seed: int | None) -> NDArray:
 
 
 def project(
-    f: Callable[[NDArray], ArrayLike],
-    bands: int,
-    method: str = "quadrature",
-    n: int | None = None,
-    seed: int | None = None,
-    hemisphere: bool = False,
+    f: Callable[[NDArray], ArrayLike], bands: int, method: str = "quadrature", n: int | None = None,
+    seed: int | None = None, hemisphere: bool = False,
 ) -> NDArray[np.float64]:
     """
     Project a function on the sphere into SH: ``c_i = integral f(w) Y_i(w) dw``.
@@ -532,8 +523,7 @@ def rotate_z(coeffs: ArrayLike, angle: ArrayLike) -> NDArray[np.float64]:
     c = as_float_array(coeffs, "coeffs")
     a = as_float_array(angle, "angle")
     vector = c.ndim == 1
-    if vector:
-        c = c[:, None]
+    c = c[:, None] if vector else c
     if c.ndim < 2:
         raise ValueError(f"coeffs must have shape (N*N,) or (..., N*N, C), got {c.shape}")
     bands = _coeff_bands(c, axis=-2)
@@ -558,20 +548,6 @@ def rotation_z_matrix(angle: float) -> NDArray[np.float64]:
     angle = math.fmod(check_scalar(angle, "angle", unit="rad"), 2.0 * math.pi)
     c, s = math.cos(angle), math.sin(angle)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
-def _rotation_matrix_sh(R: NDArray, bands: int) -> NDArray[np.float64]:
-    """Block-diagonal (N*N, N*N) SH rotation: D[i, j] = integral Y_i(w) Y_j(R^T w) dw.
-
-    The integrand is a product of two band-limited functions of bands <= N, so
-    the product rule with ``n_theta = N`` nodes is exact (to rounding).
-    """
-    dirs, wy = _quadrature_basis(bands, False, bands)
-    moved = dirs @ R  # rows are R^T w
-    d = wy @ _basis_kn(moved[:, 0], moved[:, 1], moved[:, 2], bands).T
-    l_of = band_of_index(bands)
-    d[l_of[:, None] != l_of[None, :]] = 0.0  # exact zeros off the band blocks
-    return d
 
 
 def rotate(coeffs: ArrayLike, R: ArrayLike) -> NDArray[np.float64]:
@@ -604,7 +580,15 @@ def rotate(coeffs: ArrayLike, R: ArrayLike) -> NDArray[np.float64]:
         raise ValueError(f"R must have shape (3, 3), got {r.shape}")
     if not (np.allclose(r @ r.T, np.eye(3), atol=1e-9) and abs(np.linalg.det(r) - 1.0) < 1e-9):
         raise ValueError("R must be a rotation matrix (R R^T = I and det R = +1, within 1e-9)")
-    return _rotation_matrix_sh(r, _batched_bands(c)) @ c
+    bands = _batched_bands(c)
+    # The block-diagonal (N*N, N*N) D[i, j] = integral Y_i(w) Y_j(R^T w) dw: the integrand is a product of two
+    # band-limited functions of bands <= N, so the product rule with n_theta = N nodes is exact (to rounding).
+    dirs, wy = _quadrature_basis(bands, False, bands)
+    moved = dirs @ r  # rows are R^T w
+    d = wy @ _basis_kn(moved[:, 0], moved[:, 1], moved[:, 2], bands).T
+    l_of = band_of_index(bands)
+    d[l_of[:, None] != l_of[None, :]] = 0.0  # exact zeros off the band blocks
+    return d @ c
 
 
 # --------------------------------------------------------------------------- #

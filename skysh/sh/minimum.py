@@ -26,7 +26,7 @@ from functools import cache
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from skysh.checks import as_float_array, check_coeffs, check_flag
+from skysh.checks import as_float_array, check_coeffs, check_flag, read_only
 from skysh.sh import basis as sh
 from skysh.sh.basis import K_LINEAR, K_PRODUCT, K_SECTORAL, K_ZONAL, Y00  # the basis constants, once
 
@@ -47,7 +47,7 @@ def _form_map() -> NDArray[np.float64]:
     q[6] = np.diag([-K_ZONAL, -K_ZONAL, 2 * K_ZONAL])  # (2, 0):  K0 (3 z^2 - 1) = K0 (2 z^2 - x^2 - y^2)
     q[7, 0, 2] = q[7, 2, 0] = -K_PRODUCT / 2  # (2, 1): -KB x z
     q[8] = np.diag([K_SECTORAL, -K_SECTORAL, 0.0])  # (2, 2):  K2 (x^2 - y^2)
-    m.flags.writeable = False
+    read_only(m)
     return m
 
 
@@ -169,9 +169,7 @@ def trust_region_min(c: NDArray, g: NDArray, q: NDArray, steps: int = NEWTON_STE
 def fibonacci(n: int) -> NDArray[np.float64]:
     """n nearly uniform unit vectors (Fibonacci lattice)."""
     i = np.arange(n) + 0.5
-    z, phi = 1.0 - 2.0 * i / n, i * math.pi * (3.0 - math.sqrt(5.0))
-    r = np.sqrt(np.maximum(0.0, 1.0 - z * z))
-    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
+    return sh._unit_vectors(1.0 - 2.0 * i / n, i * math.pi * (3.0 - math.sqrt(5.0)))
 
 
 def tangent_frame(p: NDArray) -> tuple[NDArray, NDArray]:
@@ -188,8 +186,7 @@ def _grid(bands: int) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     """Level-0 directions (M, 3), their basis (K, M) and tangent frames, cached."""
     dirs = fibonacci(DIRECTIONS)
     out = (dirs, np.ascontiguousarray(sh.basis(dirs, bands).T), *tangent_frame(dirs))
-    for array in out:
-        array.flags.writeable = False
+    read_only(*out)
     return out
 
 

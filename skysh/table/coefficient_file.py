@@ -91,7 +91,7 @@ from numpy.typing import NDArray
 
 from skysh import files
 from skysh._version import __version__
-from skysh.checks import check_count
+from skysh.checks import check_count, read_only
 from skysh.domain import SKY, SUN, TERM_ORDER
 from skysh.table import container, poly
 from skysh.table.container import CoefficientFileError
@@ -214,6 +214,9 @@ TABLES: tuple[TableSpec, ...] = (
 )
 """The named tables of format version 4, in member order."""
 
+_SKY: TableSpec = TableSpec(name="sky", required=True, groups=(1, MAX_FILE_BANDS), fields={}, max_magnitude=MAX_TABLE_MAGNITUDE)
+"""The sky's own table in the terms of a :class:`TableSpec` (its groups are the bands), for the checks all tables share."""
+
 
 def _layout(tables: tuple[TableSpec, ...]) -> tuple[tuple[str, ...], tuple[str, ...], dict[str, int], int]:
     """(MEMBERS, REQUIRED_MEMBERS, MAX_MEMBER_BYTES, MAX_FILE_BYTES) of a set of named tables."""
@@ -252,11 +255,28 @@ def _canonical(value: Any) -> bytes:
     return json.dumps(value, sort_keys=True, separators=(",", ":"), ensure_ascii=True, allow_nan=False).encode("ascii")
 
 
-def _same(a: Any, b: Any) -> bool:
+def _canonical_or_none(value: Any) -> bytes | None:
+    """:func:`_canonical`, or None for a value it refuses (not JSON, NaN or inf, a number too large for a float)."""
     try:
-        return _canonical(a) == _canonical(b)
+        return _canonical(value)
     except (TypeError, ValueError):
-        return False
+        return None
+
+
+def _same(a: Any, b: Any) -> bool:
+    canonical = _canonical_or_none(a)
+    return canonical is not None and canonical == _canonical_or_none(b)
+
+
+def _max_degrees(degrees: NDArray[np.int64]) -> tuple[int, int]:
+    """Largest (d_x, d_y) of any group of ``degrees`` (groups, 2): the term layout of their table."""
+    return int(degrees[:, 0].max()), int(degrees[:, 1].max())
+
+
+def _term_mask(degrees: Any, within: tuple[int, int]) -> NDArray[np.bool_]:
+    """Which terms of a table of degrees ``within`` (its layout) belong to a polynomial of ``degrees`` (d_x, d_y)."""
+    i, j = np.meshgrid(np.arange(within[0] + 1), np.arange(within[1] + 1), indexing="ij")
+    return ((i <= degrees[0]) & (j <= degrees[1])).ravel()
 
 
 def _describe(value: Any) -> str:
@@ -273,19 +293,17 @@ def _spec(name: Any) -> TableSpec:
 # --------------------------------------------------------------------------- #
 # Tables in memory and their checks
 # --------------------------------------------------------------------------- #
-def _check_arrays(table: Any, degrees: Any, names: tuple[str, str, str], groups: tuple[int, int],
-                  max_magnitude: float, max_abs_sum: float | None, bound_name: str) -> None:
-    """Dtypes, shapes, degrees, finite bounded values and the layout's zeros of one (table, degrees) pair."""
+def _check_arrays(table: Any, degrees: Any, names: tuple[str, str, str], spec: TableSpec) -> None:
+    """Dtypes, shapes, degrees, finite values within ``spec``'s bounds and the layout's zeros of one (table, degrees) pair."""
     t_name, d_name, unit = names
     if not isinstance(table, np.ndarray) or table.dtype.kind != "f":
         raise CoefficientFileError(f"{t_name} must be a numpy array of floats, got {_describe(table)}")
-    _check_degrees(degrees, d_name, unit, groups)
-    top = degrees.max(axis=0)
+    _check_degrees(degrees, d_name, unit, spec.groups)
     n = degrees.shape[0]
-    expected = (poly.n_terms((int(top[0]), int(top[1]))), n * (n + 1) // 2, 3)
+    expected = (poly.n_terms(_max_degrees(degrees)), n * (n + 1) // 2, 3)
     if table.shape != expected:
         raise CoefficientFileError(f"{t_name} must have shape {expected} for {d_name} {degrees.tolist()}, got {table.shape}")
-    _check_values(table, t_name, max_magnitude, max_abs_sum, bound_name)
+    _check_values(table, t_name, spec)
     _check_layout_zeros(table, degrees, names)
 
 
@@ -300,31 +318,49 @@ def _check_degrees(degrees: Any, d_name: str, unit: str, groups: tuple[int, int]
         raise CoefficientFileError(f"{d_name} must lie in [0, {MAX_FILE_DEGREE}], got {degrees.tolist()}")
 
 
-def _check_values(table: NDArray[np.float64], t_name: str, max_magnitude: float, max_abs_sum: float | None,
-                  bound_name: str) -> None:
-    """:func:`_check_arrays`' values: finite, within ``max_magnitude`` and (if given) ``max_abs_sum`` per channel."""
+def _check_values(table: NDArray[np.float64], t_name: str, spec: TableSpec) -> None:
+    """:func:`_check_arrays`' values: finite, within ``spec.max_magnitude`` and (if given) ``spec.max_abs_sum`` per channel."""
     if not np.all(np.isfinite(table)):
         raise CoefficientFileError(f"{t_name} holds NaN or inf")
     largest = float(np.abs(table).max())
-    if largest > max_magnitude:
-        raise CoefficientFileError(f"{t_name} holds |value| {largest:.3g}, above {max_magnitude:g} ({bound_name}): not a fitted "
-                                   "table")
-    if max_abs_sum is not None and float(np.abs(table).sum(axis=0).max()) > max_abs_sum:
+    if largest > spec.max_magnitude:
         raise CoefficientFileError(
-            f"{t_name} sums |values| to {float(np.abs(table).sum(axis=0).max()):.3g} in a channel, above {max_abs_sum:g} "
-            f"({bound_name}): its exponential could overflow")
+            f"{t_name} holds |value| {largest:.3g}, above {spec.max_magnitude:g} ({spec.bound_name}): not a fitted table")
+    if spec.max_abs_sum is not None and float(np.abs(table).sum(axis=0).max()) > spec.max_abs_sum:
+        raise CoefficientFileError(
+            f"{t_name} sums |values| to {float(np.abs(table).sum(axis=0).max()):.3g} in a channel, above {spec.max_abs_sum:g} "
+            f"({spec.bound_name}): its exponential could overflow")
 
 
 def _check_layout_zeros(table: NDArray[np.float64], degrees: NDArray[np.int64], names: tuple[str, str, str]) -> None:
     """:func:`_check_arrays`' layout promise (shapes checked): terms above a group's own degrees are zero in its rows."""
     t_name, d_name, unit = names
-    n = degrees.shape[0]
-    i, j = np.divmod(np.arange(table.shape[0]), int(degrees.max(axis=0)[1]) + 1)
-    for row, (l, _) in enumerate(zonal_half_layout(n)):
-        if np.any(table[(i > degrees[l, 0]) | (j > degrees[l, 1]), row] != 0.0):
+    for row, (l, _) in enumerate(zonal_half_layout(degrees.shape[0])):
+        if np.any(table[~_term_mask(degrees[l], _max_degrees(degrees)), row] != 0.0):
             raise CoefficientFileError(
                 f"{t_name} has non-zero terms above the degrees {degrees[l].tolist()} of {unit[:-1]} {l}: "
                 f"{d_name} and {t_name} disagree")
+
+
+def _check_present_fields(where: str, block: dict[str, Any], keys: tuple[str, ...], why: str) -> None:
+    """Refuse a metadata object (``where``) that lacks any of ``keys`` (``why`` they are needed)."""
+    missing = [key for key in keys if key not in block]
+    if missing:
+        raise CoefficientFileError(f"{where} lacks the fields {missing} {why}")
+
+
+def _check_same_fields(where: str, block: dict[str, Any], expected: Mapping[str, Any]) -> None:
+    """Refuse a field of a metadata object (``where``) present with another value than ``expected`` holds."""
+    for key, value in expected.items():
+        if key in block and not _same(block[key], value):
+            raise CoefficientFileError(f"{where} {key} {block[key]!r} differs from {value!r}, which this skysh's runtime assumes")
+
+
+def _runtime_values(degrees: NDArray[np.int64]) -> dict[str, Any]:
+    """The values this skysh's runtime assumes of the :data:`RUNTIME_FIELDS` but the colourspace and the tables,
+    for the sky's per-band ``degrees`` (bands, 2)."""
+    return {"domain": DOMAIN, "basis": BASIS, "term_order": TERM_ORDER, "degrees": degrees.tolist(),
+            "bands": int(degrees.shape[0])}
 
 
 def _check_block(spec: TableSpec, block: Any, named: NamedTable | None, colourspace: Any, required: bool) -> None:
@@ -336,12 +372,8 @@ def _check_block(spec: TableSpec, block: Any, named: NamedTable | None, coloursp
     if named is not None:
         expected["degrees"] = named.degrees.tolist()
     if required:
-        missing = [key for key in (*expected, *spec.matrices, *spec.recorded) if key not in block]
-        if missing:
-            raise CoefficientFileError(f"{where} lacks the fields {missing} the format requires")
-    for key, value in expected.items():
-        if key in block and not _same(block[key], value):
-            raise CoefficientFileError(f"{where} {key} {block[key]!r} differs from {value!r}, which this skysh's runtime assumes")
+        _check_present_fields(where, block, (*expected, *spec.matrices, *spec.recorded), "the format requires")
+    _check_same_fields(where, block, expected)
     for key in spec.matrices:
         if key in block:
             _check_matrix(where, key, block[key])
@@ -363,20 +395,13 @@ def _check_matrix(where: str, key: str, value: Any) -> None:
 def _check_runtime_metadata(metadata: dict[str, Any], sky: SkyTable, required: bool) -> None:
     """The metadata fields the runtime relies on: all present if ``required``, each valid where present."""
     if required:
-        missing = [key for key in RUNTIME_FIELDS + (HASH_KEY,) if key not in metadata]
-        if missing:
-            raise CoefficientFileError(f"metadata lacks the fields {missing} the runtime relies on")
+        _check_present_fields("metadata", metadata, RUNTIME_FIELDS + (HASH_KEY,), "the runtime relies on")
     if "colourspace" in metadata:
         name = metadata["colourspace"]
         if not isinstance(name, str) or name not in FILE_COLOURSPACES:
             raise CoefficientFileError(
                 f"metadata colourspace {name!r} is not one a coefficient file may use ({', '.join(FILE_COLOURSPACES)})")
-    expected = {"domain": DOMAIN, "basis": BASIS, "term_order": TERM_ORDER, "degrees": sky.degrees.tolist(),
-                "bands": int(sky.degrees.shape[0])}
-    for key, value in expected.items():
-        if key in metadata and not _same(metadata[key], value):
-            raise CoefficientFileError(f"metadata {key} {metadata[key]!r} differs from {value!r}, which this skysh's runtime "
-                                       "assumes")
+    _check_same_fields("metadata", metadata, _runtime_values(sky.degrees))
     _check_table_blocks(metadata, sky, required)
 
 
@@ -403,8 +428,7 @@ class NamedTable:
     @property
     def max_degrees(self) -> tuple[int, int]:
         """Largest (d_x, d_y) of any group: the term layout of :attr:`table`."""
-        d = self.degrees.max(axis=0)
-        return int(d[0]), int(d[1])
+        return _max_degrees(self.degrees)
 
 
 @dataclass(frozen=True)
@@ -442,8 +466,7 @@ class SkyTable:
     @property
     def max_degrees(self) -> tuple[int, int]:
         """Largest (d_theta, d_tau) of any band: the term layout of :attr:`table`."""
-        d = self.degrees.max(axis=0)
-        return int(d[0]), int(d[1])
+        return _max_degrees(self.degrees)
 
     @property
     def colourspace(self) -> str:
@@ -458,16 +481,14 @@ class SkyTable:
         the table's bounds, zeros above each group's degrees; valid :data:`RUNTIME_FIELDS` and
         table blocks where present.
         """
-        _check_arrays(self.table, self.degrees, ("table", "degrees", "bands"), (1, MAX_FILE_BANDS),
-                      MAX_TABLE_MAGNITUDE, None, "MAX_TABLE_MAGNITUDE")
+        _check_arrays(self.table, self.degrees, ("table", "degrees", "bands"), _SKY)
         if not isinstance(self.tables, Mapping):
             raise CoefficientFileError(f"tables must be a mapping of names to NamedTable, got {_describe(self.tables)}")
         for name, named in self.tables.items():
             spec = _spec(name)
             if not isinstance(named, NamedTable):
                 raise CoefficientFileError(f"tables[{name!r}] must be a NamedTable, got {_describe(named)}")
-            _check_arrays(named.table, named.degrees, (f"{name}_table", f"{name}_degrees", "groups"), spec.groups,
-                          spec.max_magnitude, spec.max_abs_sum, spec.bound_name)
+            _check_arrays(named.table, named.degrees, (f"{name}_table", f"{name}_degrees", "groups"), spec)
         if not isinstance(self.metadata, dict):
             raise CoefficientFileError(f"metadata must be a dict, got {_describe(self.metadata)}")
         _check_runtime_metadata(self.metadata, self, required=False)
@@ -517,8 +538,7 @@ def default_path() -> Path:
     raise CoefficientFileError(
         f"the shipped coefficient file {DEFAULT_FILE_NAME} was not found next to the package "
         f"({here / 'data'}) or in the source tree ({here.parent / 'data'}); reinstall skysh, "
-        "or run `skysh fit --out data/preetham_sh.npz --force` in a source checkout"
-    )
+        "or run `skysh fit --out data/preetham_sh.npz --force` in a source checkout")
 
 
 # --------------------------------------------------------------------------- #
@@ -576,11 +596,7 @@ def _metadata(raw: bytes) -> dict[str, Any]:
         raise CoefficientFileError(f"has unreadable metadata ({type(error).__name__}: {error})") from None
     if not isinstance(metadata, dict):
         raise CoefficientFileError(f"has metadata that is not a JSON object (a {type(metadata).__name__})")
-    try:
-        canonical = _canonical(metadata) == raw
-    except ValueError:  # NaN, inf or a number too large for a float
-        canonical = False
-    if not canonical:
+    if _canonical_or_none(metadata) != raw:  # also NaN, inf or a number too large for a float
         raise CoefficientFileError("has metadata not in canonical form (sorted keys, no spaces, ASCII, no NaN): altered after "
                                    "writing")
     return metadata
@@ -619,8 +635,7 @@ def _decode(data: bytes) -> SkyTable:
         raise CoefficientFileError(
             f"differs from what skysh writes for its content (first at byte {int(differ[0]) if differ.size else n} "
             f"of {len(data)}): headers altered, or written by another program")
-    for array in (sky.table, sky.degrees, *(a for t in tables.values() for a in (t.table, t.degrees))):
-        array.flags.writeable = False
+    read_only(sky.table, sky.degrees, *(a for t in tables.values() for a in (t.table, t.degrees)))
     return sky
 
 
@@ -652,11 +667,10 @@ def read(path: str | os.PathLike | None = None) -> SkyTable:
         raise CoefficientFileError(f"{path}: {container.NOT_NPZ} ({type(error).__name__}: {error})") from None
 
 
-def _stored_metadata(sky_table: SkyTable, table: NDArray, degrees: NDArray) -> dict[str, Any]:
+def _stored_metadata(sky_table: SkyTable) -> dict[str, Any]:
     """The caller's metadata with the runtime fields and table blocks filled in where absent, as JSON types."""
-    defaults = {"colourspace": "sRGB", "domain": DOMAIN, "basis": BASIS, "term_order": TERM_ORDER,
-                "degrees": degrees.tolist(), "bands": int(degrees.shape[0])}
-    metadata = {**defaults, **{key: value for key, value in sky_table.metadata.items() if key != HASH_KEY}}
+    caller = {key: value for key, value in sky_table.metadata.items() if key != HASH_KEY}
+    metadata = {"colourspace": "sRGB", **_runtime_values(sky_table.degrees), **caller}
     blocks = metadata.setdefault("tables", {})
     if isinstance(blocks, dict):  # else refused by the checks
         metadata["tables"] = blocks = dict(blocks)
@@ -702,13 +716,11 @@ def write(path: str | os.PathLike, sky_table: SkyTable) -> Path:
         raise CoefficientFileError(
             f"a file of format version {FORMAT_VERSION} holds the tables {absent}; this SkyTable has none "
             "(tools/fit_sky.py fits them)")
-    table = np.ascontiguousarray(sky_table.table, dtype="<f8")
-    degrees = np.ascontiguousarray(sky_table.degrees, dtype="<i8")
-    metadata = _stored_metadata(sky_table, table, degrees)
-    metadata[HASH_KEY] = content_sha256(table, degrees, metadata, sky_table.tables)
+    metadata = _stored_metadata(sky_table)  # the arrays are stored as _arrays makes them: '<f8' and '<i8', C order
+    metadata[HASH_KEY] = content_sha256(sky_table.table, sky_table.degrees, metadata, sky_table.tables)
     raw = _canonical(metadata)
     if len(raw) > MAX_METADATA_BYTES:
         raise CoefficientFileError(f"metadata is {len(raw)} bytes as JSON, above MAX_METADATA_BYTES = {MAX_METADATA_BYTES}")
-    data = _encode(SkyTable(table, degrees, tables=sky_table.tables), raw)
+    data = _encode(sky_table, raw)
     _decode(data)  # what is written reads back (every check of read, the runtime fields included)
     return files.write_atomic(path, data, parents=True)

@@ -26,7 +26,7 @@ import os
 import stat
 import struct
 import zlib
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -76,9 +76,9 @@ def _npy(values: NDArray) -> bytes:
     return b"\x93NUMPY\x01\x00" + struct.pack("<H", len(header)) + header.encode("latin1") + values.tobytes()
 
 
-def encode(members: Iterable[tuple[str, NDArray]]) -> bytes:
+def encode(members: Sequence[tuple[str, NDArray]]) -> bytes:
     """The bytes of a zip of (name, array) members, stored (uncompressed), with fixed headers, in the given order."""
-    local, central, count = bytearray(), bytearray(), 0
+    local, central = bytearray(), bytearray()
     for name, values in members:
         data, raw_name = _npy(values), name.encode("ascii")
         crc, size = zlib.crc32(data), len(data)
@@ -86,8 +86,7 @@ def encode(members: Iterable[tuple[str, NDArray]]) -> bytes:
                                  len(raw_name), 0, 0, 0, 0, _EXTERNAL_ATTR, len(local)) + raw_name
         local += _LOCAL.pack(_LOCAL_SIG, _ZIP_VERSION, 0, STORED, 0, _DOS_DATE, crc, size, size, len(raw_name), 0)
         local += raw_name + data
-        count += 1
-    end = _END.pack(_END_SIG, 0, 0, count, count, len(central), len(local), 0)
+    end = _END.pack(_END_SIG, 0, 0, len(members), len(members), len(central), len(local), 0)
     return bytes(local + central + end)
 
 
@@ -228,32 +227,30 @@ def as_path(path: Any, name: str = "path") -> Path:
         raise CoefficientFileError(f"{name} must name a file as text: {error}") from None
 
 
-def _not_regular(path: Path, mode: int) -> CoefficientFileError:
+def _check_regular(path: Path, mode: int) -> None:
+    """Refuse anything but a regular file, naming what it is, before a byte of it is read."""
+    if stat.S_ISREG(mode):
+        return
     kinds = ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO"), (stat.S_ISCHR, "a character device"),
              (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
     kind = next((label for test, label in kinds if test(mode)), "a special file")
-    return CoefficientFileError(f"{path} is {kind}, not a regular file: refused unread")
+    raise CoefficientFileError(f"{path} is {kind}, not a regular file: refused unread")
 
 
 def read_bytes(path: Path, max_bytes: int) -> bytes:
     """The file's bytes: a regular file of at most ``max_bytes``, opened without blocking, read bounded."""
     try:
         info = os.stat(path)
-        if not stat.S_ISREG(info.st_mode):
-            raise _not_regular(path, info.st_mode)
+        _check_regular(path, info.st_mode)
         if info.st_size > max_bytes:
             raise CoefficientFileError(f"{path} is {info.st_size} bytes; a coefficient file is at most {max_bytes}: refused "
                                        "unread")
         flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0) | getattr(os, "O_BINARY", 0)
         descriptor = os.open(path, flags)
         try:
-            info = os.fstat(descriptor)  # what was opened, not what the name pointed at a moment ago
-            if not stat.S_ISREG(info.st_mode):
-                raise _not_regular(path, info.st_mode)
-            chunks, remaining = [], max_bytes + 1
-            while remaining > 0 and (chunk := os.read(descriptor, min(remaining, 1 << 20))):
-                chunks.append(chunk)
-                remaining -= len(chunk)
+            _check_regular(path, os.fstat(descriptor).st_mode)  # what was opened, not what the name pointed at a moment ago
+            with open(descriptor, "rb", closefd=False) as stream:  # a buffered read loops to the bound or the end
+                data = stream.read(max_bytes + 1)
         finally:
             os.close(descriptor)
     except FileNotFoundError:
@@ -262,7 +259,6 @@ def read_bytes(path: Path, max_bytes: int) -> bytes:
         if isinstance(error, CoefficientFileError):
             raise
         raise CoefficientFileError(f"{path} cannot be read: {error}") from None
-    data = b"".join(chunks)
     if len(data) > max_bytes:
         raise CoefficientFileError(f"{path} grew beyond {max_bytes} bytes while being read: refused")
     return data

@@ -48,6 +48,7 @@ References
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass
@@ -57,7 +58,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from skysh.checks import MAX_ARRAY_ELEMENTS, check_count, check_flag, check_seed
-from skysh.domain import SKY, SUN, TERM_ORDER
+from skysh.domain import SKY, SUN
 from skysh.model import preetham
 from skysh.sh import basis as sh
 from skysh.table import coefficient_file, poly
@@ -106,6 +107,11 @@ def _check_grid(grid: Any) -> tuple[int, int]:
     return check_count(grid[0], "grid[0]", 1, MAX_GRID_NODES), check_count(grid[1], "grid[1]", 1, MAX_GRID_NODES)
 
 
+def _gauss_nodes(n: int) -> NDArray[np.float64]:
+    """The ``n`` Chebyshev-Gauss nodes in (-1, 1), increasing: ``-cos((2 k + 1) pi / (2 n))``, k = 0 .. n - 1."""
+    return -np.cos((2 * np.arange(n) + 1) * math.pi / (2 * n))
+
+
 def chebyshev_grid(grid: tuple[int, int]) -> tuple[NDArray, NDArray]:
     """
     The fitting grid: Chebyshev-Gauss nodes (interior, endpoints excluded) in each variable.
@@ -115,14 +121,11 @@ def chebyshev_grid(grid: tuple[int, int]) -> tuple[NDArray, NDArray]:
     constrained; the corners themselves stay free for held-out testing.
     """
     grid = _check_grid(grid)
-    def nodes(n: int, lo: float, hi: float) -> NDArray:
-        k = np.arange(n)
-        x = -np.cos((2 * k + 1) * math.pi / (2 * n))
-        return lo + (hi - lo) * 0.5 * (x + 1.0)
 
-    ts = nodes(grid[0], *SKY.x.interval)
-    tu = nodes(grid[1], *SKY.y.interval)
-    a, b = np.meshgrid(ts, tu, indexing="ij")
+    def nodes(n: int, lo: float, hi: float) -> NDArray:
+        return lo + (hi - lo) * 0.5 * (_gauss_nodes(n) + 1.0)
+
+    a, b = np.meshgrid(nodes(grid[0], *SKY.x.interval), nodes(grid[1], *SKY.y.interval), indexing="ij")
     return a.ravel(), b.ravel()
 
 
@@ -151,23 +154,22 @@ def edge_points(per_edge: int, seed: int) -> tuple[NDArray, NDArray]:
     return ts, tu
 
 
-def _m_nonnegative_rows(bands: int) -> NDArray[np.intp]:
-    return np.array([sh.index(l, m) for l, m in zonal_half_layout(bands)], dtype=np.intp)
+def _held_out(counts: tuple[int, int], seed: int) -> tuple[NDArray, NDArray]:
+    """:func:`held_out_points` (``counts[0]`` and the 4 corners) plus :func:`edge_points` (``counts[1]`` per edge, seed + 1)."""
+    ts, tu = held_out_points(counts[0], seed)
+    ets, etu = edge_points(counts[1], seed + 1)
+    return np.concatenate([ts, ets]), np.concatenate([tu, etu])
 
 
 def _project_one(args: tuple) -> tuple[NDArray, NDArray]:
     """Truth (m >= 0 rows) and L_min at one point; top level so process pools can pickle it."""
     ts, tu, bands, colourspace, method, samples, seed = args
     coeffs = preetham.sky_sh(ts, tu, bands, colourspace=colourspace, method=method, n=samples, seed=seed)
-    return coeffs[_m_nonnegative_rows(bands)], preetham.sky_minimum(ts, tu, colourspace)
+    return coeffs[[sh.index(l, m) for l, m in zonal_half_layout(bands)]], preetham.sky_minimum(ts, tu, colourspace)
 
 
-def project_points(
-    sun_zenith: NDArray,
-    turbidity: NDArray,
-    settings: FitSettings,
-    mapper: Callable[[Callable, Iterable], Iterable] = map,
-) -> tuple[NDArray, NDArray]:
+def project_points(sun_zenith: NDArray, turbidity: NDArray, settings: FitSettings,
+                   mapper: Callable[[Callable, Iterable], Iterable] = map) -> tuple[NDArray, NDArray]:
     """
     Project the sky at every point.
 
@@ -187,10 +189,8 @@ def project_points(
         (P, bands (bands + 1) / 2, 3) m >= 0 coefficients in cd/m^2, and (P, 4)
         sky minima (R, G, B, Y) in cd/m^2.
     """
-    jobs = [
-        (float(a), float(b), settings.bands, settings.colourspace, settings.method, settings.samples, settings.seed + i)
-        for i, (a, b) in enumerate(zip(sun_zenith, turbidity))
-    ]
+    jobs = [(float(a), float(b), settings.bands, settings.colourspace, settings.method, settings.samples, settings.seed + i)
+            for i, (a, b) in enumerate(zip(sun_zenith, turbidity))]
     results = list(mapper(_project_one, jobs))
     return np.stack([r[0] for r in results]), np.stack([r[1] for r in results])
 
@@ -206,20 +206,8 @@ def _band_rows(bands: int) -> list[NDArray[np.intp]]:
     return [np.array([k for k, (l, _) in enumerate(layout) if l == band], dtype=np.intp) for band in range(bands)]
 
 
-def _term_mask(degrees: tuple[int, int], within: tuple[int, int]) -> NDArray[np.bool_]:
-    """Which terms of the ``within`` layout belong to a polynomial of ``degrees``."""
-    i, j = np.meshgrid(np.arange(within[0] + 1), np.arange(within[1] + 1), indexing="ij")
-    return ((i <= degrees[0]) & (j <= degrees[1])).ravel()
-
-
-def fit_table(
-    sun_zenith: NDArray,
-    turbidity: NDArray,
-    coeffs: NDArray,
-    denominator: NDArray,
-    degrees: NDArray,
-    variant: tuple[bool, bool] = (True, True),
-) -> tuple[NDArray, float]:
+def fit_table(sun_zenith: NDArray, turbidity: NDArray, coeffs: NDArray, denominator: NDArray, degrees: NDArray,
+              variant: tuple[bool, bool] = (True, True)) -> tuple[NDArray, float]:
     """
     Weighted least-squares fit of every coefficient of every channel.
 
@@ -244,14 +232,14 @@ def fit_table(
         largest condition number of any weighted design matrix solved.
     """
     degrees = np.asarray(degrees, dtype=np.int64)
-    within = (int(degrees[:, 0].max()), int(degrees[:, 1].max()))
+    within = coefficient_file._max_degrees(degrees)
     full = poly.design(sun_zenith, turbidity, within, variant[0])  # (P, T)
     scale = _scale(sun_zenith, turbidity, variant)[:, None]
     coeffs, denominator = coeffs / scale[:, :, None], denominator / scale
     table = np.zeros((full.shape[1], coeffs.shape[1], 3))
     condition = 1.0
     for band, rows in enumerate(_band_rows(degrees.shape[0])):
-        mask = _term_mask(tuple(degrees[band]), within)
+        mask = coefficient_file._term_mask(degrees[band], within)
         solution, cond = _solve(full[:, mask], coeffs[:, rows], denominator)
         table[np.ix_(mask, rows)] = solution
         condition = max(condition, cond)
@@ -276,12 +264,10 @@ def _scale(sun_zenith: NDArray, turbidity: NDArray, variant: tuple[bool, bool]) 
     return np.ones(np.broadcast_shapes(np.shape(sun_zenith), np.shape(turbidity)))
 
 
-def evaluate_table(
-    table: NDArray, degrees: NDArray, sun_zenith: NDArray, turbidity: NDArray, variant: tuple[bool, bool] = (True, True)
-) -> NDArray:
+def evaluate_table(table: NDArray, degrees: NDArray, sun_zenith: NDArray, turbidity: NDArray,
+                   variant: tuple[bool, bool] = (True, True)) -> NDArray:
     """The fitted m >= 0 coefficients at points: (P, K_half, 3) in cd/m^2, no Gibbs filter, no rotation."""
-    degrees = np.asarray(degrees)
-    within = (int(degrees[:, 0].max()), int(degrees[:, 1].max()))
+    within = coefficient_file._max_degrees(np.asarray(degrees))
     scale = _scale(sun_zenith, turbidity, variant)[:, None, None]
     return np.einsum("pt,tkc->pkc", poly.design(sun_zenith, turbidity, within, variant[0]), table) * scale
 
@@ -315,13 +301,8 @@ def error_measures(predicted: NDArray, truth: NDArray, denominator: NDArray, ban
     return {"e_mean": e_mean.max(axis=1), "e_max": e_max.max(axis=1), "dc": dc.max(axis=1)}
 
 
-def choose_degrees(
-    tolerance: float,
-    bands: int,
-    max_degrees: tuple[int, int],
-    grid: tuple[NDArray, NDArray, NDArray, NDArray],
-    validation: tuple[NDArray, NDArray, NDArray, NDArray],
-) -> NDArray[np.int64]:
+def choose_degrees(tolerance: float, bands: int, max_degrees: tuple[int, int], grid: tuple[NDArray, NDArray, NDArray, NDArray],
+                   validation: tuple[NDArray, NDArray, NDArray, NDArray]) -> NDArray[np.int64]:
     """
     Smallest degrees per band whose fit meets an E_mean budget on validation points.
 
@@ -337,20 +318,17 @@ def choose_degrees(
         separate validation points (never the held-out test points).
     """
     budget = tolerance / math.sqrt(bands)
-    candidates = sorted(
-        ((i, j) for i in range(max_degrees[0] + 1) for j in range(max_degrees[1] + 1)),
-        key=lambda d: (poly.n_terms(d), d[0]),
-    )
+    candidates = sorted(itertools.product(range(max_degrees[0] + 1), range(max_degrees[1] + 1)),
+                        key=lambda d: (poly.n_terms(d), d[0]))
     chosen = np.tile(np.asarray(max_degrees, dtype=np.int64), (bands, 1))
-    rows = _band_rows(bands)
     grid_scale = preetham.luminance_scale(grid[0], grid[1])[:, None]
     val_scale = preetham.luminance_scale(validation[0], validation[1])[:, None, None]
-    for band in range(bands):
-        values = grid[2][:, rows[band]] / grid_scale[:, :, None]
+    for band, rows in enumerate(_band_rows(bands)):
+        values = grid[2][:, rows] / grid_scale[:, :, None]
         for degrees in candidates:
             fitted, _ = _solve(poly.design(grid[0], grid[1], degrees), values, grid[3] / grid_scale)
             predicted = np.einsum("pt,trc->prc", poly.design(validation[0], validation[1], degrees), fitted) * val_scale
-            diff = predicted - validation[2][:, rows[band]]
+            diff = predicted - validation[2][:, rows]
             if (np.sqrt(np.sum(diff**2, axis=1)) / validation[3]).max() <= budget:
                 chosen[band] = degrees
                 break
@@ -387,11 +365,7 @@ def _sky_metadata(settings: FitSettings, degrees: NDArray, tolerance: float | No
         },
         # The fields the runtime relies on (coefficient_file.RUNTIME_FIELDS), checked when the file is read.
         "colourspace": settings.colourspace,
-        "domain": coefficient_file.DOMAIN,
-        "basis": coefficient_file.BASIS,
-        "term_order": TERM_ORDER,
-        "degrees": degrees.tolist(),
-        "bands": int(degrees.shape[0]),
+        **coefficient_file._runtime_values(degrees),  # domain, basis, term_order, degrees, bands
         "requested_degrees": list(settings.degrees),
         "tolerance": tolerance,
         "weighting": "residuals divided by L_min per point and channel (seed eq. 3); floor "
@@ -410,12 +384,8 @@ def _sky_metadata(settings: FitSettings, degrees: NDArray, tolerance: float | No
     }
 
 
-def build(
-    settings: FitSettings,
-    tolerance: float | None = None,
-    mapper: Callable[[Callable, Iterable], Iterable] = map,
-    provenance: dict[str, Any] | None = None,
-) -> tuple[SkyTable, dict[str, Any], dict[str, tuple[NDArray, ...]]]:
+def build(settings: FitSettings, tolerance: float | None = None, mapper: Callable[[Callable, Iterable], Iterable] = map,
+          provenance: dict[str, Any] | None = None) -> tuple[SkyTable, dict[str, Any], dict[str, tuple[NDArray, ...]]]:
     """
     Project, fit, measure: the whole offline pipeline.
 
@@ -452,41 +422,33 @@ def build(
     if settings.colourspace not in coefficient_file.FILE_COLOURSPACES:  # the file could not record it
         raise ValueError(
             f"settings.colourspace must be one of {', '.join(coefficient_file.FILE_COLOURSPACES)} "
-            f"(coefficient_file.FILE_COLOURSPACES), got {settings.colourspace!r}"
-        )
-    grid_ts, grid_tu = chebyshev_grid(settings.grid)
-    test_ts, test_tu = held_out_points(settings.held_out, settings.seed)
-    points_ts = np.concatenate([grid_ts, test_ts])
-    points_tu = np.concatenate([grid_tu, test_tu])
+            f"(coefficient_file.FILE_COLOURSPACES), got {settings.colourspace!r}")
+    points = {"grid": chebyshev_grid(settings.grid), "test": held_out_points(settings.held_out, settings.seed)}
     if tolerance is not None:
         # Validation: random interior points, the corners and random points on the
         # four edges, since the worst errors sit on the boundary (sun on the horizon).
-        val_ts, val_tu = held_out_points(settings.validation, settings.seed + 1, corners=True)
-        edge_ts, edge_tu = edge_points(6, settings.seed + 2)
-        val_ts, val_tu = np.concatenate([val_ts, edge_ts]), np.concatenate([val_tu, edge_tu])
-        points_ts = np.concatenate([points_ts, val_ts])
-        points_tu = np.concatenate([points_tu, val_tu])
-    coeffs, lmin = project_points(points_ts, points_tu, settings, mapper)
+        points["validation"] = _held_out((settings.validation, 6), settings.seed + 1)
+    every_ts, every_tu = (np.concatenate(group) for group in zip(*points.values()))
+    coeffs, lmin = project_points(every_ts, every_tu, settings, mapper)
     denominator = error_denominator(lmin)
-    n_grid, n_test = grid_ts.size, test_ts.size
-    g, t = slice(0, n_grid), slice(n_grid, n_grid + n_test)
+    starts = np.cumsum([0] + [ts.size for ts, _ in points.values()])
+    spans = {name: slice(start, end) for name, start, end in zip(points, starts, starts[1:])}
+    samples: dict[str, tuple[NDArray, NDArray, NDArray, NDArray]] = {
+        name: (ts, tu, coeffs[spans[name]], denominator[spans[name]]) for name, (ts, tu) in points.items()}
     if tolerance is None:
         degrees = np.tile(np.asarray(settings.degrees, dtype=np.int64), (settings.bands, 1))
     else:
-        v = slice(n_grid + n_test, None)
-        degrees = choose_degrees(tolerance, settings.bands, settings.degrees, (grid_ts, grid_tu, coeffs[g], denominator[g]),
-                                 (points_ts[v], points_tu[v], coeffs[v], denominator[v]))
-    table, condition = fit_table(grid_ts, grid_tu, coeffs[g], denominator[g], degrees)
+        degrees = choose_degrees(tolerance, settings.bands, settings.degrees, samples["grid"], samples["validation"])
+    table, condition = fit_table(*samples["grid"], degrees)
+    test_ts, test_tu, test_coeffs, test_denominator = samples["test"]
     predicted = evaluate_table(table, degrees, test_ts, test_tu)
-    report = _report(predicted, coeffs[t], denominator[t], lmin[t], (test_ts, test_tu), settings.bands)
+    report = _report(predicted, test_coeffs, test_denominator, lmin[spans["test"]], (test_ts, test_tu), settings.bands)
     metadata = _sky_metadata(settings, degrees, tolerance, condition, report)
     metadata.update(provenance or {})
     sun, sun_block = build_sun(settings, preetham.rgb_from_xyz_matrix(settings.colourspace))
     metadata["tables"] = {"sun": sun_block}
-    samples: dict[str, tuple[NDArray, ...]] = {
-        "grid": (grid_ts, grid_tu, coeffs[g], denominator[g]), "test": (test_ts, test_tu, coeffs[t], denominator[t]),
-    }
-    return SkyTable(table=table, degrees=degrees, metadata=metadata, tables={"sun": sun}), report, samples
+    sky_table = SkyTable(table=table, degrees=degrees, metadata=metadata, tables={"sun": sun})
+    return sky_table, report, {"grid": samples["grid"], "test": samples["test"]}
 
 
 VARIANTS: dict[str, tuple[bool, bool]] = {
@@ -552,10 +514,7 @@ def _from_variables(x: NDArray, y: NDArray) -> tuple[NDArray, NDArray]:
 
 def sun_grid(grid: tuple[int, int]) -> tuple[NDArray, NDArray]:
     """The sun table's fitting grid: ``grid[0] x grid[1]`` Chebyshev-Gauss nodes of (x, y) as (sun zenith, turbidity)."""
-    def nodes(n: int) -> NDArray:
-        return -np.cos((2 * np.arange(n) + 1) * math.pi / (2 * n))
-
-    x, y = np.meshgrid(nodes(grid[0]), nodes(grid[1]), indexing="ij")
+    x, y = np.meshgrid(_gauss_nodes(grid[0]), _gauss_nodes(grid[1]), indexing="ij")
     return _from_variables(x.ravel(), y.ravel())
 
 
@@ -598,8 +557,7 @@ def fit_sun_table(sun_zenith: NDArray, turbidity: NDArray, xyz: NDArray, degrees
         ((d_x + 1)(d_y + 1), 1, 3) Chebyshev coefficients of ln XYZ
         (:data:`skysh.table.sun_table.SUN_BASIS`), and the design's condition number.
     """
-    design = _sun_design(sun_zenith, turbidity, degrees)
-    solution, _, _, singular = np.linalg.lstsq(design, np.log(xyz), rcond=None)
+    solution, _, _, singular = np.linalg.lstsq(_sun_design(sun_zenith, turbidity, degrees), np.log(xyz), rcond=None)
     return solution[:, None, :], float(singular[0] / singular[-1])
 
 
@@ -622,8 +580,7 @@ def sun_errors(fitted: NDArray, truth: NDArray, rgb_from_xyz: NDArray, points: t
         (sun zenith, turbidity), (P,) each: where the worst error sits.
     """
     xyz = np.abs(fitted / truth - 1.0)
-    rgb_truth = truth @ rgb_from_xyz.T
-    rgb = np.abs((fitted - truth) @ rgb_from_xyz.T) / np.maximum(np.abs(rgb_truth), truth[:, 1:2])
+    rgb = np.abs((fitted - truth) @ rgb_from_xyz.T) / np.maximum(np.abs(truth @ rgb_from_xyz.T), truth[:, 1:2])
     worst = int(np.argmax(np.maximum(xyz.max(axis=1), rgb.max(axis=1))))
     return {
         "held_out_points": int(truth.shape[0]),

@@ -68,7 +68,7 @@ import importlib.util
 import math
 from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass
-from functools import lru_cache
+from functools import cache, lru_cache
 from typing import Any
 
 import numpy as np
@@ -270,13 +270,8 @@ def radiance_equivalent(coeffs: ArrayLike) -> NDArray[np.float64]:
 # --------------------------------------------------------------------------- #
 # The truth and the normals
 # --------------------------------------------------------------------------- #
-def true_irradiance(
-    sun_zenith: float,
-    turbidity: float,
-    bands: int = TRUTH_BANDS,
-    n_theta: int | None = TRUTH_THETA_NODES,
-    colourspace: str = "sRGB",
-) -> NDArray[np.float64]:
+def true_irradiance(sun_zenith: float, turbidity: float, bands: int = TRUTH_BANDS, n_theta: int | None = TRUTH_THETA_NODES,
+                    colourspace: str = "sRGB") -> NDArray[np.float64]:
     """
     Irradiance SH of the true sky, sun at azimuth 0: A_l times :func:`skysh.model.preetham.sky_sh`.
 
@@ -367,13 +362,12 @@ RECOMMENDED: Objective = Objective("blend", margin=1e-3, weight=100.0, chroma=0.
 """The objective the study chose for the shipped table (``tools/irradiance_study.py``
 prints why): worst error + 100 x RMS^2, u'v' <= 0.01 at lit normals, f >= 0.1% of the mean."""
 
-_PROBLEMS: dict[Objective, Any] = {}
-"""Per process: the cvxpy problem of each :class:`Objective`, built once (parameters
-change per solve: cvxpy's DPP reuses the compiled problem)."""
+@cache
+def _problem(obj: Objective) -> Any:
+    """The cvxpy problem of the three channels, each scaled so its true mean irradiance is 1.
 
-
-def _build_problem(obj: Objective) -> Any:
-    """The cvxpy problem of the three channels, each scaled so its true mean irradiance is 1."""
+    Built once per process and :class:`Objective` (parameters change per solve: cvxpy's DPP reuses the compiled problem).
+    """
     require_solver()  # one clear line naming the extra, not cvxpy's bare "No module named"
     import cvxpy as cp  # the tools extra; never imported by the runtime
 
@@ -407,12 +401,6 @@ def _build_problem(obj: Objective) -> Any:
     return problem, x, target, values, colour, normals
 
 
-def _problem(obj: Objective) -> Any:
-    if obj not in _PROBLEMS:
-        _PROBLEMS[obj] = _build_problem(obj)
-    return _PROBLEMS[obj]
-
-
 @lru_cache(maxsize=4)
 def _normal_basis(count: int, bands: int) -> NDArray[np.float64]:
     """The basis (M, bands^2) at :func:`half_sphere_normals` (count), read-only (67 MB at 64 bands)."""
@@ -435,9 +423,8 @@ def _colour_rows(true_values: NDArray, mean: NDArray, colourspace: str) -> list[
     return [np.where(lit[:, None], r, 0.0) * mean for r in rows]
 
 
-def constrained_coefficients(
-    truth: ArrayLike, objective: Objective = Objective(), colourspace: str = "sRGB"
-) -> tuple[NDArray[np.float64], dict[str, Any]]:
+def constrained_coefficients(truth: ArrayLike, objective: Objective = Objective(),
+                             colourspace: str = "sRGB") -> tuple[NDArray[np.float64], dict[str, Any]]:
     """
     One sky's optimal 3-band irradiance subject to f >= margin x mean(f) in every channel.
 
@@ -503,13 +490,9 @@ def constrained_point(job: tuple) -> tuple[NDArray[np.float64], dict[str, Any]]:
     return constrained_coefficients(truth, objective, colourspace)
 
 
-def constrained_irradiance_grid(
-    sun_zenith: ArrayLike,
-    turbidity: ArrayLike,
-    objective: Objective = RECOMMENDED,
-    mapper: Callable[[Callable, Iterable], Iterable] = map,
-    colourspace: str = "sRGB",
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def constrained_irradiance_grid(sun_zenith: ArrayLike, turbidity: ArrayLike, objective: Objective = RECOMMENDED,
+                                mapper: Callable[[Callable, Iterable], Iterable] = map,
+                                colourspace: str = "sRGB") -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """
     The constrained optimum over the product grid of ``sun_zenith`` x ``turbidity``.
 
@@ -549,9 +532,8 @@ def constrained_irradiance_grid(
 # --------------------------------------------------------------------------- #
 # The table
 # --------------------------------------------------------------------------- #
-def fit_irradiance_table(
-    sun_zenith: ArrayLike, turbidity: ArrayLike, coeffs: ArrayLike, degrees: tuple[int, int] = (13, 7)
-) -> tuple[NDArray[np.float64], NDArray[np.int64], float]:
+def fit_irradiance_table(sun_zenith: ArrayLike, turbidity: ArrayLike, coeffs: ArrayLike,
+                         degrees: tuple[int, int] = (13, 7)) -> tuple[NDArray[np.float64], NDArray[np.int64], float]:
     """
     Fit irradiance coefficients at points with the sky table's polynomial (:func:`skysh.table.fit.fit_table`).
 
@@ -572,9 +554,8 @@ def fit_irradiance_table(
     return table, per_band, condition
 
 
-def evaluate_irradiance_table(
-    table: NDArray, degrees: NDArray, sun_zenith: ArrayLike, turbidity: ArrayLike
-) -> NDArray[np.float64]:
+def evaluate_irradiance_table(table: NDArray, degrees: NDArray, sun_zenith: ArrayLike,
+                              turbidity: ArrayLike) -> NDArray[np.float64]:
     """The tabulated irradiance at (P,) points: (P, 9, 3) coefficients, sun at azimuth 0 (m < 0 rows zero)."""
     half = fit.evaluate_table(table, degrees, np.asarray(sun_zenith), np.asarray(turbidity))
     out = np.zeros((half.shape[0], 9, 3))
@@ -592,18 +573,9 @@ HELD_OUT_SEED: int = 2018
 """Seed of the fit-error points (the certificate's: + 7); the sky table's is 2008."""
 
 
-def _held_out(counts: tuple[int, int], seed: int) -> tuple[NDArray, NDArray]:
-    """:func:`skysh.table.fit.held_out_points` (corners included) plus :func:`skysh.table.fit.edge_points`."""
-    ts, tu = fit.held_out_points(counts[0], seed)
-    ets, etu = fit.edge_points(counts[1], seed + 1)
-    return np.concatenate([ts, ets]), np.concatenate([tu, etu])
-
-
-def build_table(
-    grid: tuple[int, int], degrees: tuple[int, int] = (13, 7), objective: Objective = RECOMMENDED,
-    colourspace: str = "sRGB", mapper: Callable[[Callable, Iterable], Iterable] = map,
-    held_out: tuple[int, int] = FIT_ERROR_POINTS,
-) -> tuple[NDArray[np.float64], NDArray[np.int64], dict[str, Any]]:
+def build_table(grid: tuple[int, int], degrees: tuple[int, int] = (13, 7), objective: Objective = RECOMMENDED,
+                colourspace: str = "sRGB", mapper: Callable[[Callable, Iterable], Iterable] = map,
+                held_out: tuple[int, int] = FIT_ERROR_POINTS) -> tuple[NDArray[np.float64], NDArray[np.int64], dict[str, Any]]:
     """
     The coefficient file's irradiance table and its metadata block (``tools/fit_sky.py``).
 
@@ -633,12 +605,12 @@ def build_table(
     coeffs, grid_min = constrained_irradiance_grid(gts.reshape(grid)[:, 0], gtu.reshape(grid)[0], objective, mapper,
                                                    colourspace)
     table, per_band, condition = fit_irradiance_table(gts, gtu, coeffs.reshape(-1, 9, 3), degrees)
-    hts, htu = _held_out(held_out, HELD_OUT_SEED)
+    hts, htu = fit._held_out(held_out, HELD_OUT_SEED)
     exact = np.stack([r[0] for r in mapper(constrained_point, [(a, b, objective, colourspace)
                                                                 for a, b in zip(hts.tolist(), htu.tolist())])])
     d = evaluate_irradiance_table(table, per_band, hts, htu) - exact
     error = np.max(np.maximum(-sphere_minimum(d), -sphere_minimum(-d)) / (Y00 * exact[:, 0]), axis=1)
-    nts, ntu = _held_out(NONNEG_POINTS, HELD_OUT_SEED + 7)
+    nts, ntu = fit._held_out(NONNEG_POINTS, HELD_OUT_SEED + 7)
     dense = evaluate_irradiance_table(table, per_band, nts, ntu)
     lowest = np.min(sphere_minimum(dense) / (Y00 * dense[:, 0]), axis=1)
     negative, k, w = int(np.sum(lowest < 0.0)), int(np.argmin(lowest)), int(np.argmax(error))

@@ -27,14 +27,8 @@ from numpy.typing import ArrayLike, NDArray
 from skysh.checks import as_float_array, check_count, check_flag, check_size
 from skysh.domain import MAX_DEGREE, SKY, check_degrees
 
-__all__ = [
-    "scale",
-    "scale_unchecked",
-    "chebyshev",
-    "chebyshev_unchecked",
-    "design",
-    "n_terms",
-]
+__all__ = ["scale", "scale_unchecked", "chebyshev", "chebyshev_unchecked", "design", "n_terms"]
+
 
 def scale(sun_zenith: ArrayLike, turbidity: ArrayLike, log_turbidity: bool = True) -> tuple[NDArray, NDArray]:
     """
@@ -116,9 +110,8 @@ def n_terms(degrees: tuple[int, int]) -> int:
     return (d_theta + 1) * (d_tau + 1)
 
 
-def design(
-    sun_zenith: ArrayLike, turbidity: ArrayLike, degrees: tuple[int, int], log_turbidity: bool = True
-) -> NDArray[np.float64]:
+def design(sun_zenith: ArrayLike, turbidity: ArrayLike, degrees: tuple[int, int],
+           log_turbidity: bool = True) -> NDArray[np.float64]:
     """
     Design matrix of the 2D Chebyshev polynomial at (sun zenith, turbidity).
 
@@ -144,10 +137,8 @@ def design(
         x, y = np.broadcast_arrays(x, y)
     except ValueError:
         raise ValueError(
-            f"sun_zenith and turbidity must broadcast together, got shapes {np.shape(x)} and {np.shape(y)}"
-        ) from None
+            f"sun_zenith and turbidity must broadcast together, got shapes {np.shape(x)} and {np.shape(y)}") from None
     terms = (d_theta + 1) * (d_tau + 1)
     check_size(x.size * terms, "sun_zenith", f"{terms} terms at {x.size:,} points")
-    tx = chebyshev_unchecked(x, d_theta)
-    ty = chebyshev_unchecked(y, d_tau)
+    tx, ty = chebyshev_unchecked(x, d_theta), chebyshev_unchecked(y, d_tau)
     return (tx[..., :, None] * ty[..., None, :]).reshape(x.shape + (terms,))

@@ -767,7 +767,7 @@ class TestScalarFastPath:
         def no_batch(*_: object, **__: object) -> None:
             raise AssertionError("a scalar call took the batch path")
 
-        monkeypatch.setattr(sky, "_batch", no_batch)
+        monkeypatch.setattr(sky, "_batch_sky", no_batch)
         got = sky.coefficients(*args, bands=3)
         np.testing.assert_array_equal(got, expected)
         assert got.shape == (9, 3)
