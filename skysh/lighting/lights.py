@@ -73,11 +73,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from skysh.checks import (
-    as_float_array,
-    check_bands,
-    check_flag,
-)
+from skysh.checks import as_float_array, check_bands, check_flag, read_only
 from skysh.domain import KASTEN_COEFFICIENTS, SUN
 from skysh.model import ground
 from skysh.model.preetham import luminance_scale_unchecked
@@ -138,8 +134,7 @@ def ground_zonal(bands: int, gibbs: bool) -> NDArray[np.float64]:
     bands, gibbs = check_bands(bands, high=sh.MAX_BANDS), check_flag(gibbs, "gibbs")
     out = np.zeros(bands * bands)
     factors = np.sinc(np.arange(bands) / bands) if gibbs else np.ones(bands)
-    for l in range(bands):
-        out[l * (l + 1)] = ground.GROUND_ZONAL[l] * factors[l]
+    out[[l * (l + 1) for l in range(bands)]] = ground.GROUND_ZONAL[:bands] * factors
     return out
 
 
@@ -210,9 +205,7 @@ class LitPlan:
 
     def __init__(self, sky_plan: Any, sun_named: Any, rgb_from_xyz: ArrayLike | None, gibbs: bool,
                  lobe: bool = False) -> None:
-        from skysh.model.solar import (
-            SUN_WINDOWS,  # physics constants, only when the sun or the ground is first used
-        )
+        from skysh.model.solar import SUN_WINDOWS  # physics constants, only when the sun or the ground is first used
 
         self.sky = sky_plan  # the runtime's _Plan with the unfiltered c_10 row (its batch path uses it)
         bands = self.bands = int(sky_plan.bands)
@@ -247,15 +240,13 @@ class LitPlan:
         # the sun's Ybar and the ground's factor, each rotated (eq. 4); the result is X @ V with V (5, 3) =
         # [lum I; sun RGB; ground RGB] (Python floats), so sun, ground and the luminance scale are one product.
         c = width + 3
-        self.readback = np.array([w_ for w_ in range(width - 3, width)] + [c + w_ for w_ in range(width, width + 3)],
-                                 dtype=np.intp)
+        self.readback = np.array([*range(width - 3, width), *range(c + width, c + width + 3)], dtype=np.intp)
         source = np.asarray(sky_plan.gather)[:, 0] // 3  # m >= 0 row of every output value
         self.gather5 = np.concatenate([np.asarray(sky_plan.gather), (2 * c + 2 * source)[:, None],
                                        (2 * c + 2 * source + 1)[:, None]], axis=1).astype(np.intp)
         self.rotation5 = np.ascontiguousarray(self.rotation[:, :1].repeat(5, axis=1))
-        for array in (self.table_x, self.angle_map, self.rotation, self.zonal_rows, self.ground_rows, self.window_l,
-                      self.rgb_from_xyz, self.readback, self.gather5, self.rotation5):
-            array.flags.writeable = False
+        read_only(self.table_x, self.angle_map, self.rotation, self.zonal_rows, self.ground_rows, self.window_l,
+                  self.rgb_from_xyz, self.readback, self.gather5, self.rotation5)
 
     # ------------------------------------------------------------------ #
     def _evaluate(self, ts: float, t: float, phi: float, x: float, y: float,
@@ -278,14 +269,13 @@ class LitPlan:
         b = np.dot(packed[self.y_slice].reshape(3, depth + 1), a.reshape(depth + 1, -1)).ravel()
         lum = luminance_scale_unchecked(ts, t)
         c0, c1, c2, lx, ly, lz = b[self.readback].tolist()  # the sky's c_10 (over lum); the sun's ln XYZ
+        hf = _HF * lum
         if sun:  # Python floats: cheaper than numpy for three values
             ex, ey, ez = math.exp(lx), math.exp(ly), math.exp(lz)
             (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = self.rgb_rows
             rgb = (r00 * ex + r01 * ey + r02 * ez, r10 * ex + r11 * ey + r12 * ez, r20 * ex + r21 * ey + r22 * ez)
-            hf = _HF * lum
             e_h = (hf * c0 + cos_ts * rgb[0], hf * c1 + cos_ts * rgb[1], hf * c2 + cos_ts * rgb[2])
         else:
-            hf = _HF * lum
             rgb, e_h = (0.0, 0.0, 0.0), (hf * c0, hf * c1, hf * c2)
         return packed, b, lum, rgb, e_h
 

@@ -212,17 +212,17 @@ def _julian_century(utc: _dt.datetime) -> float:
 # --------------------------------------------------------------------------- ephemeris
 
 
-def _ephemeris_deg(t: float) -> tuple[float, float, float, float, float, float]:
+def _ephemeris_deg(t: float) -> tuple[float, float, float, float, float]:
     """
     NOAA's spreadsheet columns I..V for Julian century ``t``, in degrees (EoT in minutes).
 
     Returns (apparent longitude, corrected obliquity, right ascension,
-    declination, equation of time in minutes, geometric mean longitude).
+    declination, equation of time in minutes).
     """
     # Meeus 25.2-25.4 (NOAA columns I, J, K).
     mean_longitude = (280.46646 + t * (36000.76983 + t * 0.0003032)) % 360.0
     mean_anomaly = 357.52911 + t * (35999.05029 - 0.0001537 * t)
-    eccentricity = 0.016708634 - t * (0.000042037 + 0.0000001267 * t)
+    e = 0.016708634 - t * (0.000042037 + 0.0000001267 * t)  # eccentricity of the earth's orbit
     m = math.radians(mean_anomaly)
     # Equation of centre (column L) and true longitude (column M).
     centre = (
@@ -245,7 +245,6 @@ def _ephemeris_deg(t: float) -> tuple[float, float, float, float, float, float]:
     # Equation of time, Meeus 28.3 (columns U, V), in minutes of time.
     y = math.tan(eps / 2.0) ** 2
     l0 = math.radians(mean_longitude)
-    e = eccentricity
     eot_rad = (
         y * math.sin(2.0 * l0)
         - 2.0 * e * math.sin(m)
@@ -253,8 +252,7 @@ def _ephemeris_deg(t: float) -> tuple[float, float, float, float, float, float]:
         - 0.5 * y * y * math.sin(4.0 * l0)
         - 1.25 * e * e * math.sin(2.0 * m)
     )
-    eot_minutes = 4.0 * math.degrees(eot_rad)
-    return apparent_longitude, obliquity, right_ascension, declination, eot_minutes, mean_longitude
+    return apparent_longitude, obliquity, right_ascension, declination, 4.0 * math.degrees(eot_rad)
 
 
 def ephemeris(when: _dt.datetime | str) -> SolarEphemeris:
@@ -294,23 +292,16 @@ def ephemeris(when: _dt.datetime | str) -> SolarEphemeris:
     -7.78507
     """
     t = _julian_century(as_utc(when))
-    lam, eps, alpha, delta, eot_minutes, _ = _ephemeris_deg(t)
-    return SolarEphemeris(
-        julian_century=t,
-        apparent_longitude=math.radians(lam),
-        obliquity=math.radians(eps),
-        right_ascension=math.radians(alpha),
-        declination=math.radians(delta),
-        equation_of_time=math.radians(eot_minutes / 4.0),
-    )
+    lam, eps, alpha, delta, eot_minutes = _ephemeris_deg(t)
+    # every angle in radians; the equation of time as an hour angle (1 degree per 4 minutes of time)
+    return SolarEphemeris(t, *(math.radians(v) for v in (lam, eps, alpha, delta, eot_minutes / 4.0)))
 
 
 # --------------------------------------------------------------------------- horizon
 
 
-def _refraction_deg(elevation: NDArray[np.float64]) -> NDArray[np.float64]:
-    """NOAA's atmospheric refraction correction, degrees, for geometric ``elevation`` in degrees."""
-    e = elevation
+def _refraction_deg(e: NDArray[np.float64]) -> NDArray[np.float64]:
+    """NOAA's atmospheric refraction correction, degrees, for the geometric elevation ``e`` in degrees."""
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         tan_e = np.tan(np.radians(e))
         high = 58.1 / tan_e - 0.07 / tan_e**3 + 0.000086 / tan_e**5
@@ -384,7 +375,7 @@ def position_unchecked(
     check_size(8 * lat_deg.size, "latitude" if np.size(latitude) >= np.size(longitude) else "longitude",
                f"{lat_deg.size:,} places")
     utc = as_utc(when)
-    _, _, _, declination_deg, eot_minutes, _ = _ephemeris_deg(_julian_century(utc))
+    _, _, _, declination_deg, eot_minutes = _ephemeris_deg(_julian_century(utc))
 
     # True solar time (minutes) and hour angle (NOAA columns AB, AC), positive West.
     minutes_utc = utc.hour * 60.0 + utc.minute + (utc.second + utc.microsecond * 1e-6) / 60.0
@@ -401,8 +392,7 @@ def position_unchecked(
     zenith = np.arctan2(np.hypot(east, north), up)
     if refraction:
         elevation_deg = 90.0 - np.degrees(zenith)
-        zenith = np.radians(90.0 - (elevation_deg + _refraction_deg(elevation_deg)))
-        zenith = np.clip(zenith, 0.0, math.pi)
+        zenith = np.clip(np.radians(90.0 - (elevation_deg + _refraction_deg(elevation_deg))), 0.0, math.pi)
     azimuth = np.arctan2(north, east)
     azimuth = np.where(azimuth == -math.pi, math.pi, azimuth)  # (-pi, pi]
     return SunPosition(_scalar_or_array(np.asarray(zenith, dtype=np.float64)), _scalar_or_array(azimuth))
@@ -450,9 +440,8 @@ def position(
     if np.any(below):
         lat_b, lon_b, z_b = np.broadcast_arrays(np.asarray(latitude, float), np.asarray(longitude, float), z)
         k = np.flatnonzero(below.ravel())[0]
-        utc = as_utc(when)
         raise ValueError(
-            f"the sun is below the horizon at {utc.isoformat()} for latitude {lat_b.ravel()[k]:g} deg, "
+            f"the sun is below the horizon at {as_utc(when).isoformat()} for latitude {lat_b.ravel()[k]:g} deg, "
             f"longitude {lon_b.ravel()[k]:g} deg (sun zenith {math.degrees(z_b.ravel()[k]):.2f} deg > 90 deg): "
             "the Preetham sky model is not defined there; skysh.lighting.sun.position_unchecked returns the raw angles"
         )
@@ -462,11 +451,10 @@ def position(
 # --------------------------------------------------------------------------- azimuths
 
 
-def _wrap_pi(angle: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Wrap radians to (-pi, pi]."""
-    r = np.mod(math.pi - angle, 2.0 * math.pi)
-    r = np.where(r >= 2.0 * math.pi, 0.0, r)  # np.mod can round up to exactly 2 pi
-    return math.pi - r
+def _mod_2pi(angle: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Wrap radians to [0, 2 pi)."""
+    r = np.mod(angle, 2.0 * math.pi)
+    return np.where(r >= 2.0 * math.pi, 0.0, r)  # np.mod can round up to exactly 2 pi
 
 
 def compass_to_frame(azimuth: ArrayLike) -> NDArray[np.float64] | np.float64:
@@ -492,7 +480,7 @@ def compass_to_frame(azimuth: ArrayLike) -> NDArray[np.float64] | np.float64:
     -1.5707963267948966
     """
     a = as_float_array(azimuth, "azimuth")
-    return _scalar_or_array(_wrap_pi(math.pi / 2.0 - a))
+    return _scalar_or_array(math.pi - _mod_2pi(math.pi - (math.pi / 2.0 - a)))  # wrapped to (-pi, pi]
 
 
 def frame_to_compass(azimuth: ArrayLike) -> NDArray[np.float64] | np.float64:
@@ -515,6 +503,4 @@ def frame_to_compass(azimuth: ArrayLike) -> NDArray[np.float64] | np.float64:
     1.5707963267948966
     """
     phi = as_float_array(azimuth, "azimuth")
-    a = np.mod(math.pi / 2.0 - phi, 2.0 * math.pi)
-    a = np.where(a >= 2.0 * math.pi, 0.0, a)  # np.mod can round up to exactly 2 pi
-    return _scalar_or_array(np.asarray(a, dtype=np.float64))
+    return _scalar_or_array(_mod_2pi(math.pi / 2.0 - phi))

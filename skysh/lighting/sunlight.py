@@ -51,7 +51,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from skysh.checks import as_float_array, check_size, real_scalar
+from skysh.checks import as_float_array, check_size, read_only, real_scalar
 from skysh.domain import KASTEN_COEFFICIENTS, SUN
 from skysh.table import coefficient_file, poly
 from skysh.table.container import CoefficientFileError
@@ -65,15 +65,6 @@ _A, _B, _NEG_C = KASTEN_COEFFICIENTS[0], KASTEN_COEFFICIENTS[1], -KASTEN_COEFFIC
 _DEG: float = 180.0 / math.pi
 (_ZMIN, _ZMAX), (_TMIN, _TMAX) = SUN.x.interval, SUN.y.interval
 _M0, _SXS, _SYS = SUN.x.origin, SUN.x.scale, SUN.y.scale
-
-
-def _domain_error(ts: float, t: float) -> ValueError | None:
-    """The refusal of a scalar (sun_zenith, turbidity) outside the fitted domain (NaN included), else None."""
-    if not _ZMIN <= ts <= _ZMAX:
-        return SUN.x.error(ts)
-    if not _TMIN <= t <= _TMAX:
-        return SUN.y.error(t)
-    return None
 
 
 class SunLight:
@@ -129,8 +120,7 @@ class SunLight:
         self._angle_map[: dx + 1, 0] = np.arange(dx + 1)
         self._angle_map[dx + 1 :, 1] = np.arange(dy + 1)
         self._split = dx + 1
-        for array in (self.rgb_from_xyz, self._rgb_t, self._by_x, self._angle_map):
-            array.flags.writeable = False
+        read_only(self.rgb_from_xyz, self._rgb_t, self._by_x, self._angle_map)
 
     @classmethod
     def load(cls, path: str | Path | None = None) -> SunLight:
@@ -192,9 +182,8 @@ class SunLight:
         """
         ts, t = real_scalar(sun_zenith), real_scalar(turbidity)
         if ts is not None and t is not None:
-            error = _domain_error(ts, t)
-            if error is not None:
-                raise error
+            if not (_ZMIN <= ts <= _ZMAX and _TMIN <= t <= _TMAX):  # NaN included
+                SUN.check(ts, t)  # raises the domain's refusal of the first parameter outside it
             return np.exp(self._ln_one(ts, t))
         ln, shape = self._ln_batch(sun_zenith, turbidity)
         return np.exp(ln).reshape(shape + (3,))
@@ -210,8 +199,8 @@ class SunLight:
         """
         ts, t = real_scalar(sun_zenith), real_scalar(turbidity)
         if ts is not None and t is not None:
-            if not (_ZMIN <= ts <= _ZMAX and _TMIN <= t <= _TMAX):
-                raise _domain_error(ts, t)  # type: ignore[misc]
+            if not (_ZMIN <= ts <= _ZMAX and _TMIN <= t <= _TMAX):  # NaN included
+                SUN.check(ts, t)  # raises the domain's refusal of the first parameter outside it
             return np.dot(self.rgb_from_xyz, np.exp(self._ln_one(ts, t)))
         ln, shape = self._ln_batch(sun_zenith, turbidity)
         return (np.exp(ln) @ self._rgb_t).reshape(shape + (3,))

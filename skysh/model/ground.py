@@ -62,14 +62,8 @@ from numpy.typing import ArrayLike, NDArray
 from skysh.checks import as_float_array, check_bands, check_dirs
 from skysh.sh import basis as sh
 
-__all__ = [
-    "GROUND_ZONAL",
-    "HORIZONTAL_FACTOR",
-    "ground_radiance",
-    "ground_sh",
-    "ground_irradiance",
-    "horizontal_irradiance_from_sh",
-]
+__all__ = ["GROUND_ZONAL", "HORIZONTAL_FACTOR", "ground_radiance", "ground_sh", "ground_irradiance",
+    "horizontal_irradiance_from_sh"]
 
 
 def _legendre_at_zero(n: int) -> float:
@@ -124,9 +118,8 @@ def ground_radiance(ground_albedo: ArrayLike, horizontal_irradiance: ArrayLike) 
     if e.ndim == 0:
         raise ValueError(f"horizontal_irradiance must have shape (C,) or (..., C), got {e.shape}")
     if albedo.ndim > 1 or (albedo.ndim == 1 and albedo.shape[0] != e.shape[-1]):
-        raise ValueError(
-            f"ground_albedo must be a number or one value per channel ({e.shape[-1]}), got shape {albedo.shape}"
-        )
+        raise ValueError(f"ground_albedo must be a number or one value per channel ({e.shape[-1]}), "
+                         f"got shape {albedo.shape}")
     if albedo.size and (albedo.min() < 0.0 or albedo.max() > 1.0):
         raise ValueError(f"ground_albedo must lie in [0, 1], got {albedo.tolist()}")
     return albedo * e / math.pi

@@ -56,7 +56,6 @@ References
 
 from __future__ import annotations
 
-import itertools
 import math
 from functools import cache, lru_cache
 
@@ -127,22 +126,15 @@ QUADRATURE_SPLIT: float = math.pi / 4.0
 MAX_THETA_NODES: int = sh.MAX_GAUSS_NODES // 2
 """Largest ``n_theta`` of :func:`sky_quadrature_rule` (its azimuth rule has ``2 n_theta`` nodes)."""
 
-_DATA_KEYS: dict[str, tuple[str, str]] = {
-    "rgb": ("sky_params_rgb", "sky_rad_rgb"),
-    "spectral": ("sky_params_spec", "sky_rad_spec"),
-}
+_DATA_KEYS: dict[str, tuple[str, str]] = {"rgb": ("sky_params_rgb", "sky_rad_rgb"),
+                                          "spectral": ("sky_params_spec", "sky_rad_spec")}
 
 
 def _check_sun(sun_zenith: ArrayLike, turbidity: ArrayLike, albedo: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:
     ts = check_range(sun_zenith, "sun_zenith", *SUN_ZENITH_RANGE, unit="rad")
     t = check_range(turbidity, "turbidity", *TURBIDITY_RANGE)
     a = check_range(albedo, "albedo", *ALBEDO_RANGE)
-    try:
-        shape = np.broadcast_shapes(ts.shape, t.shape, a.shape)
-    except ValueError:
-        raise ValueError(
-            f"sun_zenith, turbidity and albedo must broadcast together, got shapes {ts.shape}, {t.shape} and {a.shape}"
-        ) from None
+    shape = preetham._broadcast_shape("sun_zenith, turbidity and albedo", ts.shape, t.shape, a.shape)
     check_size(11 * 9 * 12 * math.prod(shape), "sun_zenith", "the broadcast sky parameters")
     return ts, t, a
 
@@ -180,15 +172,8 @@ def _bezier_weights(ts: NDArray) -> NDArray[np.float64]:
     return np.asarray(BEZIER_BINOMIALS) * x**k * (1.0 - x) ** (5 - k)
 
 
-def _dataset(dataset: str) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """(params, radiance) tensors of "rgb" or "spectral", read once (HosekDataError without the extra)."""
-    tensors = hosek_data.sky_tensors()
-    return tensors[_DATA_KEYS[dataset][0]], tensors[_DATA_KEYS[dataset][1]]
-
-
-def configuration(
-    sun_zenith: ArrayLike, turbidity: ArrayLike, albedo: ArrayLike, dataset: str = "rgb"
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def configuration(sun_zenith: ArrayLike, turbidity: ArrayLike, albedo: ArrayLike,
+                  dataset: str = "rgb") -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """
     The model's parameters and mean radiance per channel (paper, section 5).
 
@@ -214,8 +199,13 @@ def configuration(
         Without the ``hosek`` extra (mitsuba's dataset file).
     """
     check_choice(dataset, "dataset", tuple(_DATA_KEYS))
-    ts, t, a = _check_sun(sun_zenith, turbidity, albedo)
-    params, mean = _dataset(dataset)
+    return _configuration(*_check_sun(sun_zenith, turbidity, albedo), dataset)
+
+
+def _configuration(ts: NDArray, t: NDArray, a: NDArray, dataset: str) -> tuple[NDArray, NDArray]:
+    """:func:`configuration` of checked inputs; the dataset's tensors are read once per process
+    (HosekDataError without the extra)."""
+    params, mean = (hosek_data.sky_tensors()[key] for key in _DATA_KEYS[dataset])
     return _interpolate(params, ts, t, a), _interpolate(mean, ts, t, a)
 
 
@@ -264,12 +254,7 @@ def distribution(cos_theta: ArrayLike, gamma: ArrayLike, params: ArrayLike) -> N
         raise ValueError(f"params must have shape (..., 9) (A..I in the dataset's order), got {p.shape}")
     ct = check_range(cos_theta, "cos_theta", 0.0, 1.0)
     g = check_range(gamma, "gamma", 0.0, math.pi, unit="rad")
-    try:
-        shape = np.broadcast_shapes(ct.shape, g.shape, p.shape[:-1])
-    except ValueError:
-        raise ValueError(
-            f"cos_theta, gamma and params[..., 0] must broadcast together, got shapes {ct.shape}, {g.shape} and {p.shape[:-1]}"
-        ) from None
+    shape = preetham._broadcast_shape("cos_theta, gamma and params[..., 0]", ct.shape, g.shape, p.shape[:-1])
     check_size(math.prod(shape), "cos_theta")
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         out = _distribution(ct, g, p)
@@ -286,19 +271,10 @@ def _distribution(ct: NDArray, gamma: NDArray, params: NDArray) -> NDArray[np.fl
     return (1.0 + a * np.exp(b / (ct + HORIZON_OFFSET))) * (c + d * np.exp(e * gamma) + f * cg * cg + g * chi + i * np.sqrt(ct))
 
 
-def _sun_dir(sun_zenith: float, sun_azimuth: float) -> NDArray[np.float64]:
-    s = math.sin(sun_zenith)
-    return np.array([s * math.cos(sun_azimuth), s * math.sin(sun_azimuth), math.cos(sun_zenith)])
-
-
 def _channels(flat: NDArray, ts: float, phi_s: float, t: float, a: float, dataset: str) -> NDArray[np.float64]:
     """The model's channels (M, C) at unit directions (M, 3), zero below the horizon; checked inputs."""
-    params, mean = _dataset(dataset)
-    p = _interpolate(params, np.asarray(ts), np.asarray(t), np.asarray(a))  # (C, 9)
-    lm = _interpolate(mean, np.asarray(ts), np.asarray(t), np.asarray(a))  # (C,)
-    sun = _sun_dir(ts, phi_s)
-    # gamma by atan2(|d x s|, d . s): accurate near the sun, where arccos loses half the digits.
-    gamma = np.arctan2(np.linalg.norm(np.cross(flat, sun), axis=-1), flat @ sun)
+    p, lm = _configuration(np.asarray(ts), np.asarray(t), np.asarray(a), dataset)  # (C, 9) and (C,)
+    gamma = preetham._sun_angle(flat, ts, phi_s)
     above = flat[:, 2] >= 0.0
     ct = np.where(above, flat[:, 2], 0.0)
     values = _distribution(ct[:, None], gamma[:, None], p) * lm
@@ -306,17 +282,16 @@ def _channels(flat: NDArray, ts: float, phi_s: float, t: float, a: float, datase
     return values
 
 
-def _check_view(dirs: ArrayLike, sun_zenith: float, sun_azimuth: float, turbidity: float, albedo: float,
-                per_point: int) -> tuple[NDArray, float, float, float, float]:
-    d = check_dirs(dirs, per_point=per_point)
+def _check_view(dirs: ArrayLike, sun_zenith: float, sun_azimuth: float, turbidity: float,
+                albedo: float) -> tuple[NDArray, float, float, float, float]:
+    d = check_dirs(dirs, per_point=40)
     ts, t, a = _check_scalars(sun_zenith, turbidity, albedo)
     phi_s = math.fmod(check_scalar(sun_azimuth, "sun_azimuth", unit="rad"), 2.0 * math.pi)
     return d, ts, phi_s, t, a
 
 
-def channel_radiance(
-    dirs: ArrayLike, sun_zenith: float, sun_azimuth: float, turbidity: float, albedo: float, dataset: str = "rgb"
-) -> NDArray[np.float64]:
+def channel_radiance(dirs: ArrayLike, sun_zenith: float, sun_azimuth: float, turbidity: float, albedo: float,
+                     dataset: str = "rgb") -> NDArray[np.float64]:
     """
     The model's own channels in the dataset's units, zero below the horizon.
 
@@ -339,19 +314,13 @@ def channel_radiance(
         At the horizon (z = 0) the model's value; below it 0.
     """
     check_choice(dataset, "dataset", tuple(_DATA_KEYS))
-    d, ts, phi_s, t, a = _check_view(dirs, sun_zenith, sun_azimuth, turbidity, albedo, 40)
+    d, ts, phi_s, t, a = _check_view(dirs, sun_zenith, sun_azimuth, turbidity, albedo)
     channels = 3 if dataset == "rgb" else WAVELENGTHS.size
     return _channels(d.reshape(-1, 3), ts, phi_s, t, a, dataset).reshape(d.shape[:-1] + (channels,))
 
 
-def spectral_radiance(
-    dirs: ArrayLike,
-    sun_zenith: float,
-    sun_azimuth: float,
-    turbidity: float,
-    albedo: float,
-    wavelengths: ArrayLike | None = None,
-) -> NDArray[np.float64]:
+def spectral_radiance(dirs: ArrayLike, sun_zenith: float, sun_azimuth: float, turbidity: float, albedo: float,
+                      wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:
     """
     Spectral sky radiance, W m^-2 sr^-1 nm^-1, zero below the horizon.
 
@@ -387,6 +356,7 @@ def _hats(lam: NDArray) -> NDArray[np.float64]:
     return hats
 
 
+@lru_cache(maxsize=1)
 def spectral_to_xyz_weights() -> NDArray[np.float64]:
     """
     (11, 3) weights: CIE 1931 XYZ in cd/m^2 = spectral radiance at :data:`WAVELENGTHS` @ weights.
@@ -397,11 +367,6 @@ def spectral_to_xyz_weights() -> NDArray[np.float64]:
     entries): the integral of the product of two piecewise-linear functions,
     exact. Read-only, computed once.
     """
-    return _xyz_weights()
-
-
-@lru_cache(maxsize=1)
-def _xyz_weights() -> NDArray[np.float64]:
     cmfs = preetham.import_colour().MSDS_CMFS[solar.CMFS_NAME]
     lam = np.asarray(cmfs.wavelengths, dtype=np.float64)
     table = np.asarray(cmfs.values, dtype=np.float64)  # (L, 3)
@@ -417,7 +382,7 @@ def _xyz_weights() -> NDArray[np.float64]:
 
 def tristimulus(dirs: ArrayLike, sun_zenith: float, sun_azimuth: float, turbidity: float, albedo: float) -> NDArray[np.float64]:
     """CIE 1931 XYZ of the sky (spectral dataset), (..., 3) in cd/m^2; arguments as :func:`channel_radiance`."""
-    return spectral_radiance(dirs, sun_zenith, sun_azimuth, turbidity, albedo) @ _xyz_weights()
+    return spectral_radiance(dirs, sun_zenith, sun_azimuth, turbidity, albedo) @ spectral_to_xyz_weights()
 
 
 def _resolve(dataset: str, colourspace: str) -> str:
@@ -427,10 +392,8 @@ def _resolve(dataset: str, colourspace: str) -> str:
     if dataset == "auto":
         return "rgb" if colourspace == RGB_DATASET_COLOURSPACE else "spectral"
     if dataset == "rgb" and colourspace != RGB_DATASET_COLOURSPACE:
-        raise ValueError(
-            f"dataset 'rgb' holds linear {RGB_DATASET_COLOURSPACE} only, got colourspace {colourspace!r}: "
-            "use dataset='spectral' (or 'auto')"
-        )
+        raise ValueError(f"dataset 'rgb' holds linear {RGB_DATASET_COLOURSPACE} only, got colourspace {colourspace!r}: "
+                         "use dataset='spectral' (or 'auto')")
     return dataset
 
 
@@ -439,19 +402,11 @@ def _rgb(flat: NDArray, ts: float, phi_s: float, t: float, a: float, colourspace
     if kind == "rgb":
         return LUMINOUS_EFFICACY * _channels(flat, ts, phi_s, t, a, "rgb")
     matrix = preetham.rgb_from_xyz_matrix(colourspace)
-    return _channels(flat, ts, phi_s, t, a, "spectral") @ (_xyz_weights() @ matrix.T)
+    return _channels(flat, ts, phi_s, t, a, "spectral") @ (spectral_to_xyz_weights() @ matrix.T)
 
 
-def radiance(
-    dirs: ArrayLike,
-    sun_zenith: float,
-    sun_azimuth: float,
-    turbidity: float,
-    albedo: float,
-    colourspace: str = "sRGB",
-    dataset: str = "auto",
-    ground: bool = False,
-) -> NDArray[np.float64]:
+def radiance(dirs: ArrayLike, sun_zenith: float, sun_azimuth: float, turbidity: float, albedo: float,
+             colourspace: str = "sRGB", dataset: str = "auto", ground: bool = False) -> NDArray[np.float64]:
     """
     Linear RGB sky radiance in cd/m^2.
 
@@ -483,7 +438,7 @@ def radiance(
     """
     ground = check_flag(ground, "ground")
     kind = _resolve(dataset, colourspace)
-    d, ts, phi_s, t, a = _check_view(dirs, sun_zenith, sun_azimuth, turbidity, albedo, 40)
+    d, ts, phi_s, t, a = _check_view(dirs, sun_zenith, sun_azimuth, turbidity, albedo)
     flat = d.reshape(-1, 3)
     values = _rgb(flat, ts, phi_s, t, a, colourspace, kind)
     if ground:
@@ -537,40 +492,12 @@ def sky_quadrature_rule(sun_zenith: float, n_theta: int = SKY_SH_THETA_NODES) ->
     with twice the nodes to 1e-8 of the DC term (``tests/model/test_hosek.py``).
     """
     ts = check_scalar(sun_zenith, "sun_zenith", *SUN_ZENITH_RANGE, unit="rad")
-    n_theta = check_count(n_theta, "n_theta", 1, MAX_THETA_NODES)
-    nodes, weights = sh.gauss_legendre(n_theta)
-    half = 0.5 * (nodes + 1.0)
-    edges = sorted({0.0, ts, QUADRATURE_SPLIT, 0.5 * math.pi})
-    thetas, theta_weights = [], []
-    for low, high in itertools.pairwise(edges):
-        if low >= QUADRATURE_SPLIT:  # u = sqrt(cos theta) from sqrt(cos high) to sqrt(cos low)
-            u_low, u_high = math.sqrt(max(math.cos(high), 0.0)), math.sqrt(math.cos(low))
-            u = u_low + (u_high - u_low) * half
-            thetas.append(np.arccos(u * u))
-            theta_weights.append(weights * (u_high - u_low) * u)  # 0.5 Jacobian x d(cos)/du = 2u
-        else:
-            theta = low + (high - low) * half
-            thetas.append(theta)
-            theta_weights.append(weights * (high - low) * 0.5 * np.sin(theta))
-    theta, w_theta = np.concatenate(thetas), np.concatenate(theta_weights)
-    phi_nodes, phi_weights = sh.gauss_legendre(2 * n_theta)
-    phi = 0.5 * math.pi * (phi_nodes + 1.0)
-    st = np.sin(theta)[:, None]
-    dirs = np.stack(np.broadcast_arrays(st * np.cos(phi), st * np.sin(phi), np.cos(theta)[:, None]), axis=-1)
-    return dirs.reshape(-1, 3), (w_theta[:, None] * (math.pi * phi_weights)[None, :]).ravel()
+    return preetham._sky_rule(ts, check_count(n_theta, "n_theta", 1, MAX_THETA_NODES), QUADRATURE_SPLIT)
 
 
-def sky_sh(
-    sun_zenith: float,
-    turbidity: float,
-    albedo: float,
-    bands: int = 7,
-    sun_azimuth: float = 0.0,
-    colourspace: str = "sRGB",
-    dataset: str = "auto",
-    ground: bool = False,
-    n_theta: int = SKY_SH_THETA_NODES,
-) -> NDArray[np.float64]:
+def sky_sh(sun_zenith: float, turbidity: float, albedo: float, bands: int = 7, sun_azimuth: float = 0.0,
+           colourspace: str = "sRGB", dataset: str = "auto", ground: bool = False,
+           n_theta: int = SKY_SH_THETA_NODES) -> NDArray[np.float64]:
     """
     Reference SH projection of the Hosek-Wilkie sky ("truth").
 
@@ -602,18 +529,15 @@ def sky_sh(
     n_theta = check_count(n_theta, "n_theta", bands, MAX_THETA_NODES)
     check_size(6 * n_theta * n_theta * bands * bands, "n_theta", "the basis at the nodes")
     kind = _resolve(dataset, colourspace)
-    dirs, weights = sky_quadrature_rule(ts, n_theta)
-    values = _rgb(dirs, ts, 0.0, t, a, colourspace, kind)
-    coeffs = (sh.basis(dirs, bands).T * weights) @ values
-    coeffs[[sh.index(*sh.lm(i)) for i in range(bands * bands) if sh.lm(i)[1] < 0]] = 0.0
+    dirs, weights = preetham._sky_rule(ts, n_theta, QUADRATURE_SPLIT)
+    coeffs = preetham._project_half(dirs, weights, _rgb(dirs, ts, 0.0, t, a, colourspace, kind), bands)
     if ground:
         coeffs += ground_sh(a * _horizontal_irradiance(ts, t, a, colourspace, kind) / math.pi, bands)
     return sh.rotate_z(coeffs, azimuth) if azimuth else coeffs
 
 
-def horizontal_irradiance(
-    sun_zenith: float, turbidity: float, albedo: float, colourspace: str = "sRGB", dataset: str = "auto"
-) -> NDArray[np.float64]:
+def horizontal_irradiance(sun_zenith: float, turbidity: float, albedo: float, colourspace: str = "sRGB",
+                          dataset: str = "auto") -> NDArray[np.float64]:
     """
     The sky's irradiance on a horizontal surface, ``int L(w) cos theta dw``: (3,) lux per channel.
 
@@ -626,15 +550,14 @@ def horizontal_irradiance(
 
 @lru_cache(maxsize=256)
 def _horizontal_irradiance(ts: float, t: float, a: float, colourspace: str, kind: str) -> NDArray[np.float64]:
-    dirs, weights = sky_quadrature_rule(ts)
+    dirs, weights = preetham._sky_rule(ts, SKY_SH_THETA_NODES, QUADRATURE_SPLIT)
     out = (weights * dirs[:, 2]) @ _rgb(dirs, ts, 0.0, t, a, colourspace, kind)
     out.flags.writeable = False
     return out
 
 
-def sky_minimum(
-    sun_zenith: float, turbidity: float, albedo: float, colourspace: str = "sRGB", dataset: str = "auto"
-) -> NDArray[np.float64]:
+def sky_minimum(sun_zenith: float, turbidity: float, albedo: float, colourspace: str = "sRGB",
+                dataset: str = "auto") -> NDArray[np.float64]:
     """
     Minimum of the sky over the closed upper hemisphere, per RGB channel and of luminance.
 

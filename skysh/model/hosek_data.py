@@ -35,6 +35,7 @@ References
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import importlib.metadata
 import importlib.util
@@ -102,14 +103,13 @@ class HosekDataError(RuntimeError):
 def _candidates() -> list[Path]:
     """Where the installed mitsuba package directory may be, without importing it."""
     found: list[Path] = []
-    try:  # the distribution's own record: unaffected by mitsuba replacing its module object on import
+    spec = None
+    # The distribution's own record (unaffected by mitsuba replacing its module object on import), then the
+    # top-level package's spec (found without running its __init__).
+    with contextlib.suppress(importlib.metadata.PackageNotFoundError):
         found.append(Path(str(importlib.metadata.distribution("mitsuba").locate_file("mitsuba"))))
-    except importlib.metadata.PackageNotFoundError:
-        pass
-    try:  # a top-level package's spec is found without running its __init__
+    with contextlib.suppress(ImportError, ValueError):
         spec = importlib.util.find_spec("mitsuba")
-    except (ImportError, ValueError):
-        spec = None
     if spec is not None:
         found.extend(Path(p) for p in (spec.submodule_search_locations or []))
         if spec.origin:
@@ -264,10 +264,9 @@ def dataset_info() -> dict[str, Any]:
         (the LICENSE file beside it, its text, or None).
     """
     path = dataset_path()
-    try:
-        version: str | None = importlib.metadata.version("mitsuba")
-    except importlib.metadata.PackageNotFoundError:
-        version = None
+    version: str | None = None
+    with contextlib.suppress(importlib.metadata.PackageNotFoundError):
+        version = importlib.metadata.version("mitsuba")
     digest = hashlib.sha256(path.read_bytes()).hexdigest()
     licence = path.parent / "LICENSE"
     return {

@@ -32,6 +32,7 @@ References
 
 from __future__ import annotations
 
+import itertools
 import math
 import warnings
 from collections.abc import Callable
@@ -53,6 +54,7 @@ from skysh.checks import (
     check_scalar,
     check_seed,
     check_size,
+    read_only,
     short_repr,
 )
 from skysh.domain import SKY
@@ -102,8 +104,7 @@ chi = (4/9 - T/120)(pi - 2 ts) (Preetham 1999, appendix; the exports write these
 _PEREZ_Y_SLOPE: tuple[float, ...] = tuple(float(v) for v in PEREZ_Y[:, 0])
 _PEREZ_Y_INTERCEPT: tuple[float, ...] = tuple(float(v) for v in PEREZ_Y[:, 1])
 _PEREZ_ALL: NDArray[np.float64] = np.stack([PEREZ_X, PEREZ_YC, PEREZ_Y])  # (3 quantities x, y, Y; 5; 2)
-for _array in (PEREZ_Y, PEREZ_X, PEREZ_YC, ZENITH_X_MATRIX, ZENITH_Y_MATRIX, _PEREZ_ALL):
-    _array.flags.writeable = False
+read_only(PEREZ_Y, PEREZ_X, PEREZ_YC, ZENITH_X_MATRIX, ZENITH_Y_MATRIX, _PEREZ_ALL)
 
 SKY_SH_THETA_NODES: int = 64
 """Gauss-Legendre nodes per zenith panel of :func:`sky_quadrature_rule` used by
@@ -132,13 +133,20 @@ def import_colour() -> ModuleType:
     return colour
 
 
+def _broadcast_shape(names: str, *shapes: tuple[int, ...]) -> tuple[int, ...]:
+    """The broadcast shape of ``shapes``, else a ValueError naming the arrays and their shapes:
+    "<names> must broadcast together, got shapes (2,) and (3,)"."""
+    try:
+        return np.broadcast_shapes(*shapes)
+    except ValueError:
+        listed = ", ".join(map(str, shapes[:-1])) + f" and {shapes[-1]}"
+        raise ValueError(f"{names} must broadcast together, got shapes {listed}") from None
+
+
 def _check_sun(sun_zenith: ArrayLike, turbidity: ArrayLike) -> tuple[NDArray, NDArray]:
     ts = check_range(sun_zenith, "sun_zenith", *SUN_ZENITH_RANGE, unit="rad")
     t = check_range(turbidity, "turbidity", *TURBIDITY_RANGE)
-    try:
-        shape = np.broadcast_shapes(ts.shape, t.shape)
-    except ValueError:
-        raise ValueError(f"sun_zenith and turbidity must broadcast together, got shapes {ts.shape} and {t.shape}") from None
+    shape = _broadcast_shape("sun_zenith and turbidity", ts.shape, t.shape)
     check_size(4 * math.prod(shape), "sun_zenith" if ts.size >= t.size else "turbidity", "the broadcast sky points")
     return ts, t
 
@@ -166,13 +174,8 @@ def perez(cos_theta: ArrayLike, gamma: ArrayLike, cos_gamma: ArrayLike, coeffici
     ct = check_range(cos_theta, "cos_theta", -1.0, 1.0)
     g = check_range(gamma, "gamma", 0.0, math.pi, unit="rad")
     cg = check_range(cos_gamma, "cos_gamma", -1.0, 1.0)
-    try:
-        shape = np.broadcast_shapes(ct.shape, g.shape, cg.shape, k.shape[:-1])
-    except ValueError:
-        raise ValueError(
-            f"cos_theta, gamma, cos_gamma and coefficients[..., 0] must broadcast together, got shapes {ct.shape}, "
-            f"{g.shape}, {cg.shape} and {k.shape[:-1]}"
-        ) from None
+    shape = _broadcast_shape("cos_theta, gamma, cos_gamma and coefficients[..., 0]", ct.shape, g.shape, cg.shape,
+                             k.shape[:-1])
     check_size(math.prod(shape), "cos_theta")
     with np.errstate(over="ignore", invalid="ignore"):
         out = _perez(ct, g, cg, k)
@@ -249,9 +252,12 @@ def luminance_scale(sun_zenith: ArrayLike, turbidity: ArrayLike) -> NDArray[np.f
     return luminance_scale_unchecked(ts, t, np)
 
 
-def _sun_dir(sun_zenith: float, sun_azimuth: float) -> NDArray[np.float64]:
+def _sun_angle(flat: NDArray, sun_zenith: float, sun_azimuth: float) -> NDArray[np.float64]:
+    """(M,) angle gamma between unit directions (M, 3) and the sun, radians: atan2(|d x s|, d . s), accurate
+    near the sun, where arccos of the dot product loses half the digits (and the dot product can exceed 1)."""
     s = math.sin(sun_zenith)
-    return np.array([s * math.cos(sun_azimuth), s * math.sin(sun_azimuth), math.cos(sun_zenith)])
+    sun = np.array([s * math.cos(sun_azimuth), s * math.sin(sun_azimuth), math.cos(sun_zenith)])
+    return np.arctan2(np.linalg.norm(np.cross(flat, sun), axis=-1), flat @ sun)
 
 
 def xyY(dirs: ArrayLike, sun_zenith: float, sun_azimuth: float, turbidity: float) -> NDArray[np.float64]:
@@ -281,17 +287,13 @@ def xyY(dirs: ArrayLike, sun_zenith: float, sun_azimuth: float, turbidity: float
     ts = check_scalar(sun_zenith, "sun_zenith", *SUN_ZENITH_RANGE, unit="rad")
     t = check_scalar(turbidity, "turbidity", *TURBIDITY_RANGE)
     phi_s = math.fmod(check_scalar(sun_azimuth, "sun_azimuth", unit="rad"), 2.0 * math.pi)
-    sun = _sun_dir(ts, phi_s)
     # The zenith rides along as the last direction so F(0, theta_s) is computed on
     # exactly the path of every view, and the zenith value is exactly (x_z, y_z, Y_z).
     flat = np.concatenate([d.reshape(-1, 3), [[0.0, 0.0, 1.0]]])
     cos_theta = flat[:, 2]
-    # gamma by atan2(|d x s|, d . s): accurate near the sun, where arccos of the
-    # dot product loses half the digits (and the dot product can exceed 1).
-    gamma = np.arctan2(np.linalg.norm(np.cross(flat, sun), axis=-1), flat @ sun)
-    cos_gamma = np.cos(gamma)
+    gamma = _sun_angle(flat, ts, phi_s)
     coeffs = _PEREZ_ALL[..., 0] * t + _PEREZ_ALL[..., 1]  # (3, 5): x, y, Y; as perez_coefficients(t)
-    f = _perez(cos_theta[:, None], gamma[:, None], cos_gamma[:, None], coeffs)
+    f = _perez(cos_theta[:, None], gamma[:, None], np.cos(gamma)[:, None], coeffs)
     zenith = np.array([*zenith_chromaticity(ts, t), zenith_luminance(ts, t)])
     values = zenith * (f[:-1] / f[-1])
     values[cos_theta[:-1] < 0.0] = np.array([zenith[0], zenith[1], 0.0])
@@ -332,18 +334,15 @@ def rgb_from_xyz_matrix(colourspace: str = "sRGB") -> NDArray[np.float64]:
 def _rgb_from_xyz_matrix(colourspace: str) -> NDArray[np.float64]:
     colour = import_colour()
     if colourspace not in colour.RGB_COLOURSPACES:
-        raise ValueError(
-            f"colourspace must be a colour-science RGB colourspace name, got {colourspace!r}; valid names: "
-            + ", ".join(colourspace_names())
-        )
+        raise ValueError(f"colourspace must be a colour-science RGB colourspace name, got {colourspace!r}; valid names: "
+                         + ", ".join(colourspace_names()))
     matrix = np.array(colour.RGB_COLOURSPACES[colourspace].matrix_XYZ_to_RGB, dtype=np.float64)
     matrix.flags.writeable = False
     return matrix
 
 
-def radiance(
-    dirs: ArrayLike, sun_zenith: float, sun_azimuth: float, turbidity: float, colourspace: str = "sRGB"
-) -> NDArray[np.float64]:
+def radiance(dirs: ArrayLike, sun_zenith: float, sun_azimuth: float, turbidity: float,
+             colourspace: str = "sRGB") -> NDArray[np.float64]:
     """
     Linear RGB sky radiance in cd/m^2, zero below the horizon.
 
@@ -363,9 +362,7 @@ def radiance(
         R = G = B = Y for a white of the colourspace's whitepoint.
     """
     matrix = rgb_from_xyz_matrix(colourspace)
-    values = xyY(dirs, sun_zenith, sun_azimuth, turbidity)
-    xyz = import_colour().xyY_to_XYZ(values)
-    return xyz @ matrix.T
+    return import_colour().xyY_to_XYZ(xyY(dirs, sun_zenith, sun_azimuth, turbidity)) @ matrix.T
 
 
 def sky_quadrature_rule(sun_zenith: float, n_theta: int = SKY_SH_THETA_NODES) -> tuple[NDArray, NDArray]:
@@ -399,35 +396,45 @@ def sky_quadrature_rule(sun_zenith: float, n_theta: int = SKY_SH_THETA_NODES) ->
     quickly, and the horizon (where the sky jumps to zero) is a panel edge.
     """
     ts = check_scalar(sun_zenith, "sun_zenith", *SUN_ZENITH_RANGE, unit="rad")
-    n_theta = check_count(n_theta, "n_theta", 1, MAX_THETA_NODES)
+    return _sky_rule(ts, check_count(n_theta, "n_theta", 1, MAX_THETA_NODES), math.pi / 2.0)  # theta panels only
+
+
+def _sky_rule(ts: float, n_theta: int, split: float) -> tuple[NDArray, NDArray]:
+    """:func:`sky_quadrature_rule` of checked values, with zenith panels ending at 0, ``ts``, ``split`` and pi/2:
+    Gauss-Legendre in theta above ``split``, in u = sqrt(cos theta) below it (``split`` < pi/2 is
+    :func:`skysh.model.hosek.sky_quadrature_rule`)."""
     nodes, weights = sh.gauss_legendre(n_theta)
+    half = 0.5 * (nodes + 1.0)
     thetas, theta_weights = [], []
-    for low, high in ((0.0, ts), (ts, math.pi / 2.0)):
-        if high > low:
-            thetas.append(low + (high - low) * 0.5 * (nodes + 1.0))
-            theta_weights.append(weights * (high - low) * 0.5)
-    theta = np.concatenate(thetas)
-    w_theta = np.concatenate(theta_weights) * np.sin(theta)
+    for low, high in itertools.pairwise(sorted({0.0, ts, split, 0.5 * math.pi})):
+        if low >= split:  # u = sqrt(cos theta) from sqrt(cos high) to sqrt(cos low)
+            u_low, u_high = math.sqrt(max(math.cos(high), 0.0)), math.sqrt(math.cos(low))
+            u = u_low + (u_high - u_low) * half
+            thetas.append(np.arccos(u * u))
+            theta_weights.append(weights * (u_high - u_low) * u)  # 0.5 Jacobian x d(cos)/du = 2u
+        else:
+            theta = low + (high - low) * half
+            thetas.append(theta)
+            theta_weights.append(weights * (high - low) * 0.5 * np.sin(theta))
+    theta, w_theta = np.concatenate(thetas), np.concatenate(theta_weights)
     phi_nodes, phi_weights = sh.gauss_legendre(2 * n_theta)
     phi = 0.5 * math.pi * (phi_nodes + 1.0)
     w_phi = math.pi * phi_weights  # (pi / 2) Jacobian, times 2 for the mirrored half
     st = np.sin(theta)[:, None]
-    dirs = np.stack(
-        np.broadcast_arrays(st * np.cos(phi), st * np.sin(phi), np.cos(theta)[:, None]), axis=-1
-    ).reshape(-1, 3)
-    return dirs, (w_theta[:, None] * w_phi[None, :]).ravel()
+    dirs = np.stack(np.broadcast_arrays(st * np.cos(phi), st * np.sin(phi), np.cos(theta)[:, None]), axis=-1)
+    return dirs.reshape(-1, 3), (w_theta[:, None] * w_phi[None, :]).ravel()
 
 
-def sky_sh(
-    sun_zenith: float,
-    turbidity: float,
-    bands: int = 7,
-    sun_azimuth: float = 0.0,
-    colourspace: str = "sRGB",
-    method: str = "quadrature",
-    n: int | None = None,
-    seed: int | None = None,
-) -> NDArray[np.float64]:
+def _project_half(dirs: NDArray, weights: NDArray, values: NDArray, bands: int) -> NDArray[np.float64]:
+    """(N * N, C) SH of ``values`` (M, C) at the nodes of :func:`_sky_rule` (checked sizes); m < 0 set to 0,
+    the coefficients of a sky symmetric about its sun's vertical plane (the rule covers azimuth [0, pi] only)."""
+    coeffs = (sh.basis_unchecked(dirs, bands).T * weights) @ values  # .T is the contiguous (K, M) buffer
+    coeffs[[i for i in range(bands * bands) if sh.lm(i)[1] < 0]] = 0.0
+    return coeffs
+
+
+def sky_sh(sun_zenith: float, turbidity: float, bands: int = 7, sun_azimuth: float = 0.0, colourspace: str = "sRGB",
+           method: str = "quadrature", n: int | None = None, seed: int | None = None) -> NDArray[np.float64]:
     """
     Reference SH projection of the Preetham sky ("truth").
 
@@ -475,14 +482,11 @@ def sky_sh(
     if method == "quadrature":
         n_theta = SKY_SH_THETA_NODES if n is None else max(bands, round(math.sqrt(n / 4.0)))
         check_size(4 * n_theta * n_theta * bands * bands, "n" if n is not None else "bands", "the basis at the nodes")
-        dirs, weights = sky_quadrature_rule(ts, n_theta)
-        values = radiance(dirs, ts, 0.0, t, colourspace)
-        coeffs = (sh.basis_unchecked(dirs, bands).T * weights) @ values  # .T is the contiguous (K, M) buffer
-        coeffs[[sh.index(*sh.lm(i)) for i in range(bands * bands) if sh.lm(i)[1] < 0]] = 0.0
+        dirs, weights = _sky_rule(ts, n_theta, math.pi / 2.0)
+        coeffs = _project_half(dirs, weights, radiance(dirs, ts, 0.0, t, colourspace), bands)
     else:
-        coeffs = sh.project(
-            lambda dirs: radiance(dirs, ts, 0.0, t, colourspace), bands, method=method, n=n, seed=seed, hemisphere=True
-        )
+        coeffs = sh.project(lambda dirs: radiance(dirs, ts, 0.0, t, colourspace), bands, method=method, n=n, seed=seed,
+                            hemisphere=True)
     return sh.rotate_z(coeffs, azimuth) if azimuth else coeffs
 
 

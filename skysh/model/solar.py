@@ -104,6 +104,7 @@ from numpy.typing import ArrayLike, NDArray
 from skysh import domain
 from skysh.checks import as_float_array, check_bands, check_choice, check_cutoff, check_dirs, check_range, read_only
 from skysh.domain import SKY
+from skysh.model.preetham import import_colour, rgb_from_xyz_matrix
 from skysh.sh import basis as sh
 
 __all__ = ["KASTEN_COEFFICIENTS", "SUN_ANGULAR_RADIUS", "SUN_SOLID_ANGLE", "WAVELENGTHS", "CMFS_NAME",
@@ -251,10 +252,6 @@ def _depths(wavelengths: NDArray[np.float64]) -> NDArray[np.float64]:
 _GRID: NDArray[np.float64] = _depths(WAVELENGTHS)
 """The per-wavelength factors on :data:`WAVELENGTHS`, computed once."""
 
-_TRAPEZOID: NDArray[np.float64] = np.full(WAVELENGTHS.shape, 1.0)
-_TRAPEZOID[[0, -1]] = 0.5
-_TRAPEZOID.flags.writeable = False
-
 
 # --------------------------------------------------------------------------- #
 # The attenuated sun
@@ -271,8 +268,7 @@ def relative_optical_mass(sun_zenith: ArrayLike) -> NDArray[np.float64]:
     ``sun_zenith`` in radians, [0, pi/2], any shape. Dimensionless: 0.9995 at the
     zenith, 36.51 on the horizon (``tools/sun_study.py --table``).
     """
-    ts = check_range(sun_zenith, "sun_zenith", *SUN_ZENITH_RANGE, unit="rad")
-    return _air_mass(ts)
+    return _air_mass(check_range(sun_zenith, "sun_zenith", *SUN_ZENITH_RANGE, unit="rad"))
 
 
 def _air_mass(ts: NDArray) -> NDArray:
@@ -291,11 +287,9 @@ def _transmittance(ts: NDArray, t: NDArray, grid: NDArray) -> NDArray:
     m = _air_mass(ts)[..., None]
     beta = (ANGSTROM_BETA_SLOPE * t + ANGSTROM_BETA_INTERCEPT)[..., None]
     rayleigh, aerosol, ozone, k_g, k_ww = grid[:5]
-    ga, gb, gc = _MIXED_GAS
-    wa, wb, wc = _WATER_VAPOUR
     depth = m * (rayleigh + beta * aerosol + ozone)
-    depth = depth + ga * k_g * m / (1.0 + gb * k_g * m) ** gc
-    depth = depth + wa * k_ww * m / (1.0 + wb * k_ww * m) ** wc
+    for k, (a, b, c) in ((k_g, _MIXED_GAS), (k_ww, _WATER_VAPOUR)):  # mixed gases, water vapour
+        depth = depth + a * k * m / (1.0 + b * k * m) ** c
     return np.exp(-depth)
 
 
@@ -341,11 +335,9 @@ def spectral_radiance(sun_zenith: ArrayLike, turbidity: ArrayLike, wavelengths: 
 @lru_cache(maxsize=1)
 def _cmf_weights() -> NDArray[np.float64]:
     """(W, 3): K_m x trapezoid weight (1 nm) x the CIE 1931 xbar, ybar, zbar at :data:`WAVELENGTHS`."""
-    from skysh.model.preetham import import_colour  # colour-science is heavy: imported on the first colour integral
-
-    cmfs = import_colour().MSDS_CMFS[CMFS_NAME]
-    table = np.array(cmfs[WAVELENGTHS], dtype=np.float64)  # tabulated at 1 nm: no interpolation
-    weights = LUMINOUS_EFFICACY * _TRAPEZOID[:, None] * table
+    cmfs = import_colour().MSDS_CMFS[CMFS_NAME]  # colour-science is heavy: imported on the first colour integral
+    weights = LUMINOUS_EFFICACY * np.array(cmfs[WAVELENGTHS], dtype=np.float64)  # tabulated at 1 nm: no interpolation
+    weights[[0, -1]] *= 0.5  # the trapezoid rule's end weights
     weights.flags.writeable = False
     return weights
 
@@ -389,8 +381,6 @@ def illuminance_rgb(sun_zenith: ArrayLike, turbidity: ArrayLike, colourspace: st
     R = G = B = Y for a white of its whitepoint. Near the horizon the sun leaves
     the sRGB gamut: blue (at T = 6 also green) turns slightly negative.
     """
-    from skysh.model.preetham import rgb_from_xyz_matrix
-
     matrix = rgb_from_xyz_matrix(colourspace)
     return illuminance_xyz(sun_zenith, turbidity) @ matrix.T
 
@@ -406,8 +396,7 @@ def sun_direction(sun_zenith: ArrayLike, sun_azimuth: ArrayLike) -> NDArray[np.f
     ``sun_zenith`` in radians in [0, pi/2], ``sun_azimuth`` any finite radians (from +X towards +Y).
     """
     ts = check_range(sun_zenith, "sun_zenith", *SUN_ZENITH_RANGE, unit="rad")
-    phi = as_float_array(sun_azimuth, "sun_azimuth")
-    ts, phi = np.broadcast_arrays(ts, phi)
+    ts, phi = np.broadcast_arrays(ts, as_float_array(sun_azimuth, "sun_azimuth"))
     s = np.sin(ts)
     return np.stack([s * np.cos(phi), s * np.sin(phi), np.cos(ts)], axis=-1)
 
@@ -485,8 +474,7 @@ def sun_window_family(cutoff: float, attenuation: float, bands: int) -> NDArray[
     a = float(check_range(attenuation, "attenuation", 0.0, 1.0))
     x = np.arange(bands) / w
     s = np.where(x < 1.0, np.sinc(x) ** 4, 0.0)
-    if bands > 1:
-        s[1] *= a
+    s[1:2] *= a  # band 1, if there is one
     return s
 
 
@@ -495,12 +483,9 @@ SUN_WINDOWS: tuple[NDArray[np.float64], ...] = tuple(
 )
 """Per-band factors of the non-negative sun window for 1..7 bands: ``SUN_WINDOWS[N - 1]`` has N entries."""
 
-for _row in SUN_WINDOWS:
-    _row.flags.writeable = False
-
 _WINDOW_KERNEL: NDArray[np.float64] = sh.cosine_lobe(MAX_WINDOW_BANDS)
 """Clamped-cosine factors A_0 .. A_6."""
-_WINDOW_KERNEL.flags.writeable = False
+read_only(*SUN_WINDOWS, _WINDOW_KERNEL)
 
 
 def sun_window(bands: int = 3, kind: str = "nonnegative") -> NDArray[np.float64]:
@@ -544,14 +529,13 @@ def _irradiance_series(window: ArrayLike) -> NDArray[np.float64]:
 
 def delta_irradiance_minimum(window: ArrayLike) -> float:
     """Exact minimum over all normals of a unit delta light's irradiance windowed by ``window``
-    (per-band factors, shape (N,), 1 <= N <= 7), sr^-1; the unwindowed mean is 1/4."""
-    return _series_minimum(_irradiance_series(window))
+    (per-band factors, shape (N,), 1 <= N <= 7), sr^-1; the unwindowed mean is 1/4.
 
-
-def _series_minimum(series: NDArray[np.float64]) -> float:
-    """Exact minimum over t in [-1, 1] of a Legendre series: endpoints and real roots of its derivative."""
+    The irradiance is a Legendre series in t = cos(angle): its exact minimum over [-1, 1] is at an
+    endpoint or a real root of its derivative."""
     from numpy.polynomial import legendre
 
+    series = _irradiance_series(window)
     t = [-1.0, 1.0]
     if series.shape[0] > 2:
         roots = np.atleast_1d(legendre.legroots(legendre.legder(series)))
@@ -646,9 +630,8 @@ def derive_sun_window(bands: int, scan: tuple[float, float, float] = (1.5, 40.0,
     return w_best, a, err
 
 
-def sun_sh(
-    direction: ArrayLike, illuminance: ArrayLike, bands: int = 3, window: str | ArrayLike = "nonnegative"
-) -> NDArray[np.float64]:
+def sun_sh(direction: ArrayLike, illuminance: ArrayLike, bands: int = 3,
+           window: str | ArrayLike = "nonnegative") -> NDArray[np.float64]:
     """
     The sun (a directional light) as windowed SH radiance, to add to sky SH.
 
@@ -684,6 +667,5 @@ def sun_sh(
         factors = as_float_array(window, "window")
         if factors.ndim != 1 or factors.shape[0] < bands:
             raise ValueError(f"window must have shape (>= {bands},), got {factors.shape}")
-    l_of = np.repeat(np.arange(bands), 2 * np.arange(bands) + 1)
-    y = sh.basis(d, bands) * factors[l_of]
+    y = sh.basis(d, bands) * factors[sh.band_of_index(bands)]
     return y[..., :, None] * e[..., None, :]
