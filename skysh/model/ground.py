@@ -62,8 +62,7 @@ from numpy.typing import ArrayLike, NDArray
 from skysh.checks import as_float_array, check_bands, check_dirs
 from skysh.sh import basis as sh
 
-__all__ = ["GROUND_ZONAL", "HORIZONTAL_FACTOR", "ground_radiance", "ground_sh", "ground_irradiance",
-    "horizontal_irradiance_from_sh"]
+__all__ = ["GROUND_ZONAL", "HORIZONTAL_FACTOR", "ground_radiance", "horizontal_irradiance_from_sh"]
 
 
 def _legendre_at_zero(n: int) -> float:

@@ -78,9 +78,8 @@ from skysh.model import hosek_data, preetham, solar
 from skysh.model.ground import ground_sh
 from skysh.sh import basis as sh
 
-__all__ = ["PARAMETER_NAMES", "LUMINOUS_EFFICACY", "SKY_SH_THETA_NODES", "HosekDataError", "configuration",
-    "distribution", "channel_radiance", "spectral_radiance", "tristimulus", "radiance", "luminance", "luminance_row",
-    "sky_sh", "sky_minimum"]
+__all__ = ["PARAMETER_NAMES", "HosekDataError", "configuration", "distribution", "channel_radiance",
+    "spectral_radiance", "tristimulus", "radiance", "luminance", "sky_sh"]
 
 HosekDataError = hosek_data.HosekDataError
 

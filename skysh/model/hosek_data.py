@@ -48,7 +48,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["HosekDataError", "dataset_path", "dataset_info"]
+__all__ = ["HosekDataError", "dataset_info"]
 
 MITSUBA_VERSION: str = "3.9.1"
 """The mitsuba release whose dataset file skysh reads (the ``hosek`` extra pins it)."""

@@ -61,9 +61,8 @@ from skysh.domain import SKY
 from skysh.sh import basis as sh
 
 __all__ = ["SUN_ZENITH_RANGE", "TURBIDITY_RANGE", "PEREZ_Y", "PEREZ_X", "PEREZ_YC", "ZENITH_X_MATRIX",
-    "ZENITH_Y_MATRIX", "SKY_SH_THETA_NODES", "perez", "zenith_luminance", "luminance", "radiance",
-    "rgb_from_xyz_matrix", "sky_quadrature_rule", "sky_sh", "sky_minimum", "luminance_scale",
-    "zenith_luminance_unchecked", "luminance_scale_unchecked"]
+    "ZENITH_Y_MATRIX", "SKY_SH_THETA_NODES", "perez", "luminance", "radiance", "rgb_from_xyz_matrix",
+    "sky_quadrature_rule", "sky_sh", "sky_minimum", "luminance_scale", "luminance_scale_unchecked"]
 
 SUN_ZENITH_RANGE: tuple[float, float] = SKY.x.interval
 """Domain of the sun zenith angle, radians (the model is undefined below the horizon): the

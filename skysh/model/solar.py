@@ -107,11 +107,8 @@ from skysh.domain import SKY
 from skysh.model.preetham import import_colour, rgb_from_xyz_matrix
 from skysh.sh import basis as sh
 
-__all__ = ["KASTEN_COEFFICIENTS", "SUN_ANGULAR_RADIUS", "SUN_SOLID_ANGLE", "WAVELENGTHS", "CMFS_NAME",
-    "MAX_WINDOW_BANDS", "SEED_PUNCTUAL_WINDOW", "SUN_WINDOW_PARAMETERS", "SUN_WINDOWS", "relative_optical_mass",
-    "spectral_radiance", "luminance", "direct_normal_illuminance", "illuminance_xyz", "illuminance_rgb",
-    "extraterrestrial_xyz", "sun_direction", "sun_window", "delta_irradiance_error", "delta_irradiance_minimum",
-    "derive_sun_window", "sun_sh"]
+__all__ = ["KASTEN_COEFFICIENTS", "SUN_ANGULAR_RADIUS", "SUN_WINDOWS", "luminance", "illuminance_xyz",
+    "illuminance_rgb", "sun_direction", "sun_window", "sun_sh"]
 
 # --------------------------------------------------------------------------- #
 # Domain

@@ -49,8 +49,7 @@ from skysh.sh import basis as sh
 from skysh.sh import minimum as shmin
 from skysh.sh.minimum import exact_min
 
-__all__ = ["DeringWarning", "DERING_TARGETS", "SEED_WINDOW_SIZES", "SEED_TABLE_1", "DELTA_MARGIN",
-    "CERTIFIED_MARGIN", "LINEAR_ATTENUATION", "WINDOW_TABLE", "PUNCTUAL_WINDOW", "sinc4_window", "delta_minimum",
+__all__ = ["DeringWarning", "DERING_TARGETS", "DELTA_MARGIN", "CERTIFIED_MARGIN", "PUNCTUAL_WINDOW", "delta_minimum",
     "linear_attenuation", "window_table", "exact_min", "dering"]
 
 

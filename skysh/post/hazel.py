@@ -48,7 +48,7 @@ from skysh.checks import as_float_array, check_coeffs, check_dirs, check_size
 from skysh.sh import basis as sh
 
 __all__ = ["L0_SCALE", "L1_SCALE", "L2_OFF_DIAGONAL_SCALE", "L2_ZZ_SCALE", "L2_XX_MINUS_YY_SCALE",
-    "ANTIPODAL_FACTOR", "GEOMERICS_EXPONENT_ENDS", "MAX_BANDS", "radiance", "irradiance", "irradiance_l1_nonlinear"]
+    "ANTIPODAL_FACTOR", "GEOMERICS_EXPONENT_ENDS", "radiance", "irradiance"]
 
 L0_SCALE: float = sh.Y00
 """R0 = L0_SCALE c0: (1 / 4 pi) integral R = c0 / (4 pi Y00), Y00 = 1 / (2 sqrt(pi))."""

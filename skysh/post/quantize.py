@@ -60,8 +60,7 @@ from numpy.typing import ArrayLike, NDArray
 from skysh.checks import as_float_array, check_choice, check_coeffs, check_count, check_flag, read_only, short_repr
 from skysh.sh import basis as sh
 
-__all__ = ["DEFAULT_BITS", "PRIOR_BOUNDS", "TIGHT_BOUNDS", "IRRADIANCE_FACTORS", "TABLE3_THETA_NODES", "bounds",
-    "ratios", "decompress", "table3_errors"]
+__all__ = ["PRIOR_BOUNDS", "TIGHT_BOUNDS", "IRRADIANCE_FACTORS", "bounds", "ratios", "decompress", "table3_errors"]
 
 BOUND_NAMES: tuple[str, ...] = ("prior", "tight")
 """Names accepted by ``bound``: sqrt(2l + 1) for every coefficient, or sqrt(15)/2 for the non-zonal quadratics."""

@@ -64,7 +64,7 @@ from skysh.checks import (
 
 __all__ = ["Y00", "K_LINEAR", "K_PRODUCT", "K_ZONAL", "K_SECTORAL", "BASIS_CONSTANTS", "MAX_BANDS",
     "MAX_GAUSS_NODES", "PROJECTION_METHODS", "index", "lm", "band_of_index", "basis", "basis_unchecked",
-    "basis_recurrence", "evaluate", "project", "quadrature_rule", "gauss_legendre", "rotate_z", "rotate", "convolve",
+    "basis_recurrence", "evaluate", "project", "quadrature_rule", "gauss_legendre", "rotate_z", "rotate",
     "cosine_lobe", "irradiance", "Y_UP_MATRIX", "to_y_up"]
 
 _SQRT_PI: float = math.sqrt(math.pi)

@@ -30,7 +30,7 @@ from skysh.checks import as_float_array, check_coeffs, check_flag, read_only
 from skysh.sh import basis as sh
 from skysh.sh.basis import K_LINEAR, K_PRODUCT, K_SECTORAL, K_ZONAL, Y00  # the basis constants, once
 
-__all__ = ["FORM_MAP", "DIRECTIONS", "COVER_RADIUS", "LEVELS", "sphere_quadratic", "exact_min", "tangent_frame"]
+__all__ = ["FORM_MAP", "COVER_RADIUS", "LEVELS", "sphere_quadratic", "exact_min"]
 
 MAX_MIN_BANDS: int = 7
 """Largest band count of :func:`exact_min` (49 coefficients)."""

@@ -65,9 +65,8 @@ from skysh.table import coefficient_file, poly
 from skysh.table.coefficient_file import NamedTable, SkyTable, zonal_half_layout
 from skysh.table.sun_table import air_mass, sun_variables
 
-__all__ = ["LMIN_FLOOR", "FitSettings", "chebyshev_grid", "held_out_points", "edge_points", "project_points",
-    "error_denominator", "fit_table", "evaluate_table", "error_measures", "build", "VARIANTS", "compare_variants",
-    "SUN_ERROR_DEFINITION", "build_sun"]
+__all__ = ["LMIN_FLOOR", "FitSettings", "held_out_points", "error_denominator", "fit_table", "evaluate_table",
+    "error_measures", "build", "VARIANTS", "compare_variants", "SUN_ERROR_DEFINITION", "build_sun"]
 
 LMIN_FLOOR: float = 0.05
 """Floor of a channel's L_min as a fraction of the sky's darkest luminance.

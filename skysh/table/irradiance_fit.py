@@ -80,11 +80,8 @@ from skysh.sh import basis as sh
 from skysh.sh import minimum as shmin
 from skysh.table import fit
 
-__all__ = ["Y00", "LOBE", "OPTIMISATION_NORMALS", "LP_EXPONENT", "BLEND_WEIGHT", "CHROMA_FLOOR", "Objective",
-    "RECOMMENDED", "sphere_minimum", "true_irradiance", "constrained_coefficients", "constrained_point",
-    "constrained_irradiance_grid", "fit_irradiance_table", "evaluate_irradiance_table", "FIT_ERROR_POINTS",
-    "NONNEG_POINTS", "build_table", "SOLVER_EXTRA", "SOLVER_INSTALL", "missing_solver_packages", "solver_available",
-    "solver_missing_message"]
+__all__ = ["Y00", "RECOMMENDED", "sphere_minimum", "constrained_coefficients", "FIT_ERROR_POINTS", "build_table",
+    "solver_available", "solver_missing_message"]
 
 # --------------------------------------------------------------------------- #
 # The solver: the tools extra, imported only by the functions that solve

@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 from skysh.checks import as_float_array, check_count, check_flag, check_size
 from skysh.domain import MAX_DEGREE, SKY, check_degrees
 
-__all__ = ["scale", "scale_unchecked", "chebyshev", "chebyshev_unchecked", "design", "n_terms"]
+__all__ = ["scale", "scale_unchecked", "chebyshev_unchecked", "design", "n_terms"]
 
 
 def scale(sun_zenith: ArrayLike, turbidity: ArrayLike, log_turbidity: bool = True) -> tuple[NDArray, NDArray]:
