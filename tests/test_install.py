@@ -18,6 +18,8 @@ from pathlib import Path
 import pytest
 from conftest import ROOT, environment_without_pythonpath
 
+pytestmark = pytest.mark.integration  # builds a wheel with setuptools and installs it with pip into a venv
+
 
 @pytest.fixture(scope="module")
 def installed(wheel: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:

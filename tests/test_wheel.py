@@ -20,9 +20,12 @@ from __future__ import annotations
 import zipfile
 from pathlib import Path
 
+import pytest
 from conftest import ROOT
 
 from skysh.table import coefficient_file
+
+pytestmark = pytest.mark.integration  # builds a wheel with pip and setuptools
 
 
 def _names(wheel: Path) -> list[str]:

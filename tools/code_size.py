@@ -65,10 +65,10 @@ EXPORT_PACKAGE: str = f"{PACKAGE}.export"
 """The export package: issue 24's second group (its template files are not Python and are counted apart)."""
 
 PACKAGE_BUDGETS: dict[str, int] = {
-    "skysh": 15, "skysh.__main__": 5, "skysh._version": 1, "skysh.checks": 175, "skysh.domain": 115,
-    "skysh.options": 90, "skysh.files": 70, "skysh.literals": 30,
-    "skysh.sh": 490, "skysh.post": 590, "skysh.model": 1060, "skysh.table": 1330, "skysh.lighting": 490,
-    "skysh.runtime": 400, "skysh.engines": 415, "skysh.export": 700, "skysh.app": 1290,
+    "skysh": 15, "skysh.__main__": 5, "skysh._version": 1, "skysh.checks": 145, "skysh.domain": 110,
+    "skysh.options": 90, "skysh.files": 65, "skysh.literals": 30,
+    "skysh.sh": 440, "skysh.post": 505, "skysh.model": 900, "skysh.table": 1210, "skysh.lighting": 440,
+    "skysh.runtime": 350, "skysh.engines": 395, "skysh.export": 700, "skysh.app": 1360,
 }
 """Code lines each package (a sub-package, or a module of the package's root) may hold (issue 24, item 5):
 a ceiling a change must argue with, counted in code lines so that prose is never squeezed to pay for code."""

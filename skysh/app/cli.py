@@ -40,12 +40,13 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
-from skysh.app.argtypes import FLOAT64_TINY, integer, real
+from skysh.app.argtypes import integer, real
 from skysh.app.cli_output import (
     TABLE_ZERO_BELOW,
     format_coefficients,
@@ -91,10 +92,6 @@ _CONVENTIONS: dict[str, str] = {"z": _CONVENTION, "y": "Y up (zenith +Y), right-
                                  "and its +Y becomes -Z (skysh.sh.basis.to_y_up); the SH are evaluated at this frame's "
                                  "(x, y, z); " + _SH_CONVENTION}
 """The frame and SH convention of the output, by ``--up``."""
-_NORMALISE_HELP: str = (
-    "scale so that the irradiance DC coefficient E(0,0) = pi L(0,0), averaged over R, G and B, is exactly 1 "
-    "(then the mean irradiance over all normals, E(0,0)/(2 sqrt(pi)), averages 0.2821); radiance output "
-    "gets the same factor. Applied last, in the output colourspace")
 
 
 class _UsageError(Exception):
@@ -172,8 +169,7 @@ def _add_export_parser(commands: Any) -> None:
         "numbers. C: a header with double tables (--c-real float for float); GLSL and HLSL: float32 tables and "
         "arithmetic; JSON: float64 tables and the algorithm in words; js: an ES module coefficients(sunZenith, "
         "turbidity, sunAzimuth, options) with options {bands, gibbs, irradiance, dering, sun, groundAlbedo, engine} "
-        "and the Python defaults, and sunLight(sunZenith, turbidity, sunAzimuth).",
-    )
+        "and the Python defaults, and sunLight(sunZenith, turbidity, sunAzimuth).")
     export.add_argument("--format", choices=("c", "glsl", "hlsl", "json", "js"), required=True, help="language of the file: c (a "
                         "header, e.g. sky_sh.h: #include it, link with -lm), glsl, hlsl, json, or js (an ES module, the "
                         "per-frame runtime for browsers, with every engine as a per-call option; its TypeScript declarations "
@@ -194,8 +190,7 @@ def _add_coeffs_parser(commands: Any) -> None:
         "coeffs", help="the sky's SH coefficients for one frame",
         description="The sky's SH coefficients for one sun position and turbidity: (N*N) rows x (R, G, B), "
         "radiance in cd/m^2 (with --irradiance: cd/m^2*sr, lux for the luminance), linear RGB of "
-        "--colourspace. " + _CONVENTION + ".",
-    )
+        "--colourspace. " + _CONVENTION + ".")
     _add_sun(coeffs)
     coeffs.add_argument("--bands", type=_bands, default=3, metavar="N", help="SH bands N, [1, 7] (the shipped file's); default 3 "
                         "(9 coefficients)")
@@ -225,7 +220,10 @@ def _add_coeffs_parser(commands: Any) -> None:
     units = coeffs.add_mutually_exclusive_group()
     units.add_argument("--exposure", type=_positive, metavar="X", help="multiply every coefficient by X > 0 (the units are "
                        "multiplied by X)")
-    units.add_argument("--normalise", action="store_true", help=_NORMALISE_HELP)
+    units.add_argument("--normalise", action="store_true", help="scale so that the irradiance DC coefficient E(0,0) = pi "
+                       "L(0,0), averaged over R, G and B, is exactly 1 (then the mean irradiance over all normals, "
+                       "E(0,0)/(2 sqrt(pi)), averages 0.2821); radiance output gets the same factor. Applied last, in the "
+                       "output colourspace")
     coeffs.set_defaults(handler=_cmd_coeffs)
 
 
@@ -238,8 +236,7 @@ def _add_render_parser(commands: Any) -> None:
         "(the sky's log-average maps to 0.18), Reinhard tone mapping and the sRGB transfer function. Columns: "
         "azimuth -180 (left) to 180 degrees (right); rows: elevation 90 (top, the zenith) to -90 degrees (bottom), "
         "horizon in the middle; both axes are labelled in degrees; a ring marks the sun. With --sun and "
-        "--ground-albedo the scene gains the sun's disk and a Lambertian ground, in all three panels.",
-    )
+        "--ground-albedo the scene gains the sun's disk and a Lambertian ground, in all three panels.")
     _add_sun(render)
     render.add_argument("--out", type=Path, required=True, metavar="FILE.png", help="PNG file to write")
     render.add_argument("--bands", type=_bands, default=3, metavar="N", help="SH bands N, [1, 7]; default 3")
@@ -257,12 +254,9 @@ def _add_view_parser(commands: Any) -> None:
         "view", help="an interactive page in the browser: the sky, its SH and the irradiance, live",
         description="Serve the viewer page on 127.0.0.1 (only its own files; Ctrl-C stops it), or write it as "
         "static files with --out (they work from any static server and from file://). Nothing is fetched "
-        "from the network: the page ships in the package.",
-    )
-    view.add_argument("--out", type=Path, default=None, metavar="DIR", help="write the page's files into DIR instead of serving "
-                      "them")
-    view.add_argument("--port", type=_port, default=None, metavar="N", help="TCP port on 127.0.0.1, [0, 65535]; default 0 "
-                      "(a free one)")
+        "from the network: the page ships in the package.")
+    view.add_argument("--out", type=Path, metavar="DIR", help="write the page's files into DIR instead of serving them")
+    view.add_argument("--port", type=_port, metavar="N", help="TCP port on 127.0.0.1, [0, 65535]; default 0 (a free one)")
     view.add_argument("--open", action="store_true", help="open the page in the default browser")
     view.set_defaults(handler=_cmd_view)
 
@@ -271,20 +265,13 @@ def build_parser() -> argparse.ArgumentParser:
     """The parser of the ``skysh`` command (subcommands coeffs, export, render, fit, report)."""
     from skysh._version import __version__
 
-    parser = _Parser(
-        prog="skysh",
-        description="Spherical-harmonic lighting of the Preetham sky (Habel et al. 2008). Angles in degrees; "
-        "radiance in cd/m^2, linear sRGB by default.",
-        epilog="Every refusal prints one line 'skysh: error: ...' and exits with status 2.",
-    )
+    parser = _Parser(prog="skysh", description="Spherical-harmonic lighting of the Preetham sky (Habel et al. 2008). Angles in "
+                     "degrees; radiance in cd/m^2, linear sRGB by default.",
+                     epilog="Every refusal prints one line 'skysh: error: ...' and exits with status 2.")
     parser.add_argument("--version", action="version", version=f"skysh {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-
-    _add_coeffs_parser(commands)
-    _add_export_parser(commands)
-    _add_render_parser(commands)
-    _add_view_parser(commands)
-
+    for add_parser in (_add_coeffs_parser, _add_export_parser, _add_render_parser, _add_view_parser):
+        add_parser(commands)
     for name, script in TOOL_COMMANDS.items():
         commands.add_parser(name, add_help=False, help=f"run tools/{script} with the remaining arguments (source "
                             f"checkout only; 'skysh {name} --help')")
@@ -297,11 +284,10 @@ def build_parser() -> argparse.ArgumentParser:
 class _Sun:
     """The sun of a command line: radians for the library, degrees to echo, and the place if given."""
 
-    def __init__(self, zenith_deg: float, azimuth_deg: float, place: dict[str, Any], given: bool) -> None:
-        self.zenith_deg, self.azimuth_deg = zenith_deg, azimuth_deg
+    def __init__(self, zenith_deg: float, azimuth_deg: float, place: dict[str, Any]) -> None:
+        self.zenith_deg, self.azimuth_deg = zenith_deg, azimuth_deg  # as typed (echoed exactly), or from the place
         self.zenith, self.azimuth = math.radians(zenith_deg), math.radians(azimuth_deg)
         self.place = place
-        self.given = given  # degrees typed by the user (echoed exactly), else computed from the place and time
 
 
 def _sun_angles(args: argparse.Namespace) -> _Sun:
@@ -323,8 +309,7 @@ def _sun_angles(args: argparse.Namespace) -> _Sun:
             raise _UsageError(f"--time {args.time}: the sun is below the horizon at --lat {number_text(args.lat)} --lon "
                               f"{number_text(args.lon)} (sun zenith {math.degrees(zenith):.2f} deg > 90 deg): the Preetham "
                               "sky model is not defined there")
-        record = {"lat": args.lat, "lon": args.lon, "time": args.time}
-        return _Sun(math.degrees(zenith), math.degrees(azimuth), record, given=False)
+        return _Sun(math.degrees(zenith), math.degrees(azimuth), {"lat": args.lat, "lon": args.lon, "time": args.time})
     if args.sun_zenith is None:
         raise _UsageError("give --sun-zenith (and --sun-azimuth) or --lat/--lon/--time")
     from skysh.domain import SKY
@@ -332,7 +317,7 @@ def _sun_angles(args: argparse.Namespace) -> _Sun:
     low, high = (math.degrees(v) for v in SKY.x.interval)
     if not low <= args.sun_zenith <= high:
         raise _UsageError(f"--sun-zenith must lie in {_sun_zenith_range()} degrees, got {number_text(args.sun_zenith)}")
-    return _Sun(args.sun_zenith, 0.0 if args.sun_azimuth is None else args.sun_azimuth, {}, given=True)
+    return _Sun(args.sun_zenith, 0.0 if args.sun_azimuth is None else args.sun_azimuth, {})
 
 
 def _turbidity_range() -> str:
@@ -375,24 +360,19 @@ def _check_colourspace(name: str | None, sky: Any) -> None:
                           + ", ".join(preetham.colourspace_names())) from None
 
 
-_FLOAT32_MAX: float = 3.4028234663852886e38
-_FLOAT32_TINY: float = 1.1754943508222875e-38
-
-
 def _scaled(before: NDArray[np.float64], scale: float, flag: str, fmt: str) -> NDArray[np.float64]:
     """``before * scale``; refuse a scale that overflows or flushes coefficients towards zero in the output's precision."""
     import numpy as np
 
     with np.errstate(over="ignore", under="ignore"):
         after = before * scale
-    float32 = fmt in ("glsl", "hlsl")
-    largest, tiny = (_FLOAT32_MAX, _FLOAT32_TINY) if float32 else (math.inf, FLOAT64_TINY)
-    kind = "float32" if float32 else "float64"
+    kind = "float32" if fmt in ("glsl", "hlsl") else "float64"
+    limits = np.finfo(kind)  # float64: every finite value fits
     magnitude = np.abs(after)
-    if not np.all(np.isfinite(after)) or magnitude.max() > largest:
+    if not np.all(np.isfinite(after)) or magnitude.max() > limits.max:
         raise _UsageError(f"{flag} makes the coefficients overflow {kind} (largest |coefficient| before scaling "
                           f"{np.abs(before).max():.6g}); choose a smaller factor")
-    if np.any((before != 0.0) & (magnitude < tiny)):
+    if np.any((before != 0.0) & (magnitude < limits.tiny)):
         raise _UsageError(f"{flag} makes coefficients underflow {kind} (to subnormal numbers or zero); choose a larger factor")
     return after
 
@@ -413,8 +393,7 @@ def _cmd_coeffs(args: argparse.Namespace) -> int:
     # the runtime's rules by intent (engines light diffusely: their 3-band presets take the certified irradiance table)
     o = Options.resolve(args.bands, args.gibbs, args.dering, args.irradiance, None, args.sun, args.ground_albedo,
                         args.colourspace, args.engine, has_table=sky.has_irradiance_table, max_bands=sky.bands)
-    gibbs, dering = o.gibbs, o.dering
-    c = sky.coefficients(sun.zenith, args.turbidity, sun.azimuth, bands=o.bands, gibbs=gibbs, dering=dering,
+    c = sky.coefficients(sun.zenith, args.turbidity, sun.azimuth, bands=o.bands, gibbs=o.gibbs, dering=o.dering,
                          irradiance=o.irradiance, colourspace=o.colourspace, sun=o.sun,
                          ground_albedo=o.ground_albedo or 0.0, irradiance_table=o.irradiance_table)
     if args.up == "y":
@@ -423,7 +402,7 @@ def _cmd_coeffs(args: argparse.Namespace) -> int:
     info: dict[str, Any] = {  # sun degrees as given (or computed from the place and time)
         "skysh_version": __version__, "quantity": "irradiance" if args.irradiance else "radiance", "bands": args.bands,
         "sun_zenith_deg": sun.zenith_deg, "sun_azimuth_deg": sun.azimuth_deg, "sun_zenith_rad": sun.zenith,
-        "sun_azimuth_rad": sun.azimuth, "turbidity": args.turbidity, "gibbs": gibbs, "dering": dering, "sun": args.sun,
+        "sun_azimuth_rad": sun.azimuth, "turbidity": args.turbidity, "gibbs": o.gibbs, "dering": o.dering, "sun": args.sun,
         "ground_albedo": args.ground_albedo, "up": args.up, "units": units, "scale": scale,
         "normalise": args.normalise, "colourspace": args.colourspace or sky.colourspace,
         "convention": _CONVENTIONS[args.up], **({"place": sun.place} if sun.place else {}),
@@ -478,10 +457,7 @@ def _sun_light_text(sky: Any, sun: _Sun, args: argparse.Namespace, scale: float,
 
 def _check_engine_options(args: argparse.Namespace, sky: Any) -> None:
     """Refuse what does not go with ``--engine`` (the preset owns the quantity and the frame)."""
-    from skysh.engines import presets as engines
-
-    if args.engine not in engines.ENGINES:
-        raise _UsageError(f"--engine must be one of {', '.join(engines.ENGINES)}, got {args.engine!r}")
+    limit = _engine_bands(args.engine)
     if args.irradiance:
         raise _UsageError("--irradiance does not go with --engine: the preset converts the radiance into the quantity "
                           "the engine takes (radiance, or E/pi pre-scaled)")
@@ -489,10 +465,18 @@ def _check_engine_options(args: argparse.Namespace, sky: Any) -> None:
         raise _UsageError("--up does not go with --engine: the preset converts to the engine's own frame")
     if args.format not in ENGINE_FORMATS:
         raise _UsageError(f"--format with --engine must be one of {', '.join(ENGINE_FORMATS)}, got {args.format!r}")
-    limit = engines.ENGINE_MAX_BANDS[args.engine]
     if args.bands > limit:
         raise _UsageError(f"--bands must be at most {limit} for --engine {args.engine} (the engine holds {limit} bands), got "
                           f"{args.bands}")
+
+
+def _engine_bands(engine: str) -> int:
+    """The bands ``--engine`` holds, after refusing an unknown name."""
+    from skysh.engines import presets as engines
+
+    if engine not in engines.ENGINES:
+        raise _UsageError(f"--engine must be one of {', '.join(engines.ENGINES)}, got {engine!r}")
+    return engines.ENGINE_MAX_BANDS[engine]
 
 
 def _output(path: Path, flag: str = "--out", folder: bool = False) -> Path:
@@ -524,34 +508,23 @@ def _cmd_export(args: argparse.Namespace) -> int:
     if args.bands is not None:
         _check_bands(args.bands, sky)
     if args.engine is not None:
-        from skysh.engines import presets as engines
-
-        if args.engine not in engines.ENGINES:
-            raise _UsageError(f"--engine must be one of {', '.join(engines.ENGINES)}, got {args.engine!r}")
+        limit = _engine_bands(args.engine)
         if args.format == "js":
             raise _UsageError("--engine does not go with --format js: the js module takes the engine as a per-call option")
-        limit = engines.ENGINE_MAX_BANDS[args.engine]
         if args.bands is not None and args.bands > limit:
             raise _UsageError(f"--bands must be at most {limit} for --engine {args.engine}, got {args.bands}")
-    stdout = str(args.out) == "-"
-    outputs: dict[Path, bytes] = {}
-    if not stdout:
-        outputs[_output(args.out)] = b""
-        if args.format == "js":
-            from skysh.export.js import declarations_path
+    from skysh.export.js import declarations, declarations_path
 
-            outputs[_output(declarations_path(args.out), "--out (its TypeScript declarations)")] = b""
+    stdout = str(args.out) == "-"
+    paths = [] if stdout else [_output(args.out)]  # checked before the tables are exported
+    if args.format == "js" and not stdout:
+        paths.append(_output(declarations_path(args.out), "--out (its TypeScript declarations)"))
     text = export_source(sky, args.format, bands=args.bands, real=args.c_real, engine=args.engine)
     if stdout:
         sys.stdout.write(text)
         return 0
-    paths = list(outputs)
-    outputs[paths[0]] = text.encode("utf-8")
-    if args.format == "js":
-        from skysh.export.js import declarations
-
-        outputs[paths[1]] = declarations(sky, args.bands).encode("utf-8")
-    _write(outputs)
+    texts = [text] + ([declarations(sky, args.bands)] if args.format == "js" else [])
+    _write({path: content.encode("utf-8") for path, content in zip(paths, texts)})
     bands = args.bands if args.bands is not None else ("1-7" if args.format == "js" else 3)
     print(f"wrote {' and '.join(map(str, paths))} ({args.format}, {bands} bands, {len(text) / 1024:.1f} KiB)")
     return 0
@@ -608,17 +581,16 @@ def _tools_dir() -> Path | None:
 
 def _tool_loader(command: str) -> Any:
     """A function importing ``command``'s module: the package's, or ``tools/<script>`` of the source checkout."""
-    import importlib
-    import importlib.util
+    import importlib.util  # binds importlib too
 
     target = TOOL_COMMANDS[command]
     if not target.endswith(".py"):
         return lambda: importlib.import_module(target)
     tools = _tools_dir()
-    path = None if tools is None else tools / target
-    if path is None:
+    if tools is None:
         raise _UsageError(f"'skysh {command}' runs tools/{target}, which is only in a source checkout of skysh (this "
                           "skysh is installed without its tools/ folder); clone the repository and run it there")
+    path = tools / target
     if not path.is_file():
         raise _UsageError(f"'skysh {command}' runs tools/{target}, which this source checkout lacks ({path})")
     spec = importlib.util.spec_from_file_location(f"skysh_tools_{path.stem}", path)
@@ -684,12 +656,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = build_parser().parse_args(args_list)
         return int(args.handler(args))
     except (_UsageError, ValueError) as error:  # CoefficientFileError is a ValueError too
-        message = " ".join(str(error).split())
-        print(f"skysh: error: {message}", file=sys.stderr)
+        print(f"skysh: error: {' '.join(str(error).split())}", file=sys.stderr)  # on one line
         return EXIT_USAGE
     except BrokenPipeError:  # e.g. piped into head: stop quietly, as other command-line tools do
-        import os
-
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
     except OSError as error:  # an unwritable --out

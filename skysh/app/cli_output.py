@@ -36,6 +36,13 @@ so nothing below the threshold carries information."""
 ONE_LINE_LISTS = re.compile(r"\[\s*(-?[0-9.eE+-]+(?:,\s*-?[0-9.eE+-]+)*)\s*\]")
 """An innermost JSON list of numbers, to print on one line."""
 
+_COMMENTS: dict[str, str] = {"table": "# {}", "c": "/* {} */", "glsl": "// {}", "hlsl": "// {}"}
+"""A header line as a comment of each commented ``--format``."""
+
+_VECTORS: dict[str, str] = {"c": "static const double {}[3] = {{{}}};", "glsl": "const vec3 {} = vec3({});",
+                            "hlsl": "static const float3 {} = float3({});"}
+"""A named constant 3-vector of ``--sun-light`` in each source ``--format`` (name, then the numbers)."""
+
 
 def number_text(value: float) -> str:
     """A float as text that reads back as the same float ("90", "90.0000001")."""
@@ -86,6 +93,13 @@ def settings_text(info: dict[str, Any]) -> str:
             + ("; the sun's disk" if info.get("sun") else "") + (f"; ground albedo {albedo}" if albedo != "0" else ""))
 
 
+def _json_rows(record: dict[str, Any]) -> str:
+    """``record`` as JSON indented by one, each innermost list of numbers on one line (:data:`ONE_LINE_LISTS`)."""
+    import json
+
+    return ONE_LINE_LISTS.sub(lambda match: "[" + " ".join(match.group(1).split()) + "]", json.dumps(record, indent=1))
+
+
 def lm_rows(bands: int) -> list[tuple[int, int]]:
     from skysh.sh import basis as sh
 
@@ -113,22 +127,18 @@ def format_coefficients(coefficients: NDArray[np.float64], fmt: str, info: dict[
     info
         The parameters to record (keys as in the JSON output).
     """
-    import json
-
     rows = lm_rows(math.isqrt(len(coefficients)))
     values = [[float(v) for v in row] for row in coefficients]
     if fmt == "json":
-        text = json.dumps({"coefficients": values, "lm": [list(lm) for lm in rows], **info}, indent=1)
-        return ONE_LINE_LISTS.sub(lambda match: "[" + " ".join(match.group(1).split()) + "]", text)  # a row per line
+        return _json_rows({"coefficients": values, "lm": [list(lm) for lm in rows], **info})  # a row per line
     if fmt == "csv":
         lines = ["i,l,m,R,G,B"] + [f"{i},{l},{m}," + ",".join(map(repr, v)) for i, ((l, m), v) in enumerate(zip(rows, values))]
         return "\n".join(lines)
     context = _coefficients_context(info)
     if fmt == "table":
         return _coefficients_table(rows, values, context)
-    if fmt == "c":
-        return _coefficients_c(rows, values, context)
-    return _coefficients_shader(rows, values, context, fmt)
+    body = _coefficients_c(rows, values) if fmt == "c" else _coefficients_shader(rows, values, fmt)
+    return "\n".join([_COMMENTS[fmt].format(line) for line in context] + body)
 
 
 def _coefficients_context(info: dict[str, Any]) -> list[str]:
@@ -151,33 +161,28 @@ def _coefficients_table(rows: list[tuple[int, int]], values: list[list[float]], 
     return "\n".join(["# " + line for line in context] + [header] + body)
 
 
-def _coefficients_c(rows: list[tuple[int, int]], values: list[list[float]], context: list[str]) -> str:
-    """``--format c``: a commented double array ``SKY_SH[N*N][3]``, full precision."""
-    n = len(values)
+def _coefficients_c(rows: list[tuple[int, int]], values: list[list[float]]) -> list[str]:
+    """``--format c``'s lines below the header: a double array ``SKY_SH[N*N][3]``, full precision."""
     body = [f"    {{{', '.join(map(repr, v))}}}, /* {i}: l={l}, m={m} */" for i, ((l, m), v) in enumerate(zip(rows, values))]
-    comment = ["/* " + line + " */" for line in context]
-    return "\n".join(comment + [f"static const double SKY_SH[{n}][3] = {{"] + body + ["};"])
+    return [f"static const double SKY_SH[{len(values)}][3] = {{"] + body + ["};"]
 
 
-def _coefficients_shader(rows: list[tuple[int, int]], values: list[list[float]], context: list[str], fmt: str) -> str:
-    """``--format glsl`` or ``hlsl``: a commented float32 constant array ``SKY_SH``, shortest round-trip text."""
-    from skysh.export.c_like import float32_literal
+def _coefficients_shader(rows: list[tuple[int, int]], values: list[list[float]], fmt: str) -> list[str]:
+    """``--format glsl`` or ``hlsl``'s lines below the header: a float32 constant array ``SKY_SH``, shortest round-trip
+    text."""
+    from skysh.literals import float32_literal
 
     n = len(values)
     vec3 = "vec3" if fmt == "glsl" else "float3"
-    items = [f"    {vec3}({', '.join(float32_literal(x) for x in v)})" for v in values]
-    labels = [f" // {i}: l={l}, m={m}" for i, (l, m) in enumerate(rows)]
-    body = [item + ("," if k < n - 1 else "") + label for k, (item, label) in enumerate(zip(items, labels))]
-    comment = ["// " + line for line in context]
+    body = [f"    {vec3}({', '.join(map(float32_literal, v))}){',' if i < n - 1 else ''} // {i}: l={l}, m={m}"
+            for i, ((l, m), v) in enumerate(zip(rows, values))]
     if fmt == "glsl":
-        return "\n".join(comment + [f"const vec3 SKY_SH[{n}] = vec3[{n}]("] + body + [");"])
-    return "\n".join(comment + [f"static const float3 SKY_SH[{n}] = {{"] + body + ["};"])
+        return [f"const vec3 SKY_SH[{n}] = vec3[{n}]("] + body + [");"]
+    return [f"static const float3 SKY_SH[{n}] = {{"] + body + ["};"]
 
 
 def format_engine(c: NDArray[np.float64], engine: str, fmt: str, info: dict[str, Any]) -> str:
     """The text of ``skysh coeffs --engine``: the engine's numbers in its own layout, or a snippet."""
-    import json
-
     from skysh.engines import presets as engines
 
     if fmt == "snippet":
@@ -188,8 +193,7 @@ def format_engine(c: NDArray[np.float64], engine: str, fmt: str, info: dict[str,
     labels = list(mapping.labels)
     info = {**info, "engine": engine, "shape": list(mapping.shape), "labels": labels}
     if fmt == "json":
-        text = json.dumps({"values": values.tolist(), **info}, indent=1)
-        return ONE_LINE_LISTS.sub(lambda match: "[" + " ".join(match.group(1).split()) + "]", text)
+        return _json_rows({"values": values.tolist(), **info})
     row_labels = labels if len(labels) == rows.shape[0] else [str(i) for i in range(rows.shape[0])]
     if fmt == "csv":
         return "\n".join(f"{label}," + ",".join(map(repr, map(float, row))) for label, row in zip(row_labels, rows))
@@ -228,10 +232,7 @@ def format_sun_light(direction: ArrayLike, rgb: ArrayLike, fmt: str, info: dict[
 
     import numpy as np
 
-    from skysh.checks import as_float_array, check_choice
-
-    check_choice(fmt, "fmt", ("table", "json", "csv", "glsl", "hlsl", "c") + (("snippet",) if engine else ()))
-    d = as_float_array(direction, "direction")
+    d = np.asarray(direction, dtype=np.float64)  # checked by skysh.SkySH.sun_light, the format by the command line
     if engine is not None and fmt == "snippet":
         from skysh.engines.sun import sun_snippet
 
@@ -276,18 +277,13 @@ def _sun_light_commented(dl: list[float], el: list[float], light: dict[str, Any]
     info = {**info, **{key: value for key, value in light.items() if key != "engine_light_colour"}}
     if light:
         info["engine_light_colour"] = " ".join(f"{v:.9g}" for v in light["engine_light_colour"])
-    context = [f"{key}: {value}" for key, value in info.items()]
+    context = [_COMMENTS[fmt].format(f"{key}: {value}") for key, value in info.items()]
     if fmt == "table":
-        rows = [f"{'direction':>12} " + " ".join(f"{v:>15.9g}" for v in dl),
-                f"{'illuminance':>12} " + " ".join(f"{v:>15.7g}" for v in el)]
-        return "\n".join(["# " + line for line in context] + [f"{'':>12} {'x | R':>15} {'y | G':>15} {'z | B':>15}"] + rows)
-    if fmt == "c":
-        body = [f"static const double SUN_DIRECTION[3] = {{{', '.join(map(repr, dl))}}};",
-                f"static const double SUN_ILLUMINANCE[3] = {{{', '.join(map(repr, el))}}};"]
-        return "\n".join(["/* " + line + " */" for line in context] + body)
-    from skysh.export.c_like import float32_literal
+        return "\n".join(context + [f"{'':>12} {'x | R':>15} {'y | G':>15} {'z | B':>15}",
+                                    f"{'direction':>12} " + " ".join(f"{v:>15.9g}" for v in dl),
+                                    f"{'illuminance':>12} " + " ".join(f"{v:>15.7g}" for v in el)])
+    from skysh.literals import float32_literal
 
-    kind, const = ("vec3", "const") if fmt == "glsl" else ("float3", "static const")
-    body = [f"{const} {kind} SUN_DIRECTION = {kind}({', '.join(float32_literal(v) for v in dl)});",
-            f"{const} {kind} SUN_ILLUMINANCE = {kind}({', '.join(float32_literal(v) for v in el)});"]
-    return "\n".join(["// " + line for line in context] + body)
+    number = repr if fmt == "c" else float32_literal
+    vectors = (("SUN_DIRECTION", dl), ("SUN_ILLUMINANCE", el))
+    return "\n".join(context + [_VECTORS[fmt].format(name, ", ".join(map(number, v))) for name, v in vectors])

@@ -48,6 +48,7 @@ import subprocess
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
+from functools import partial
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -94,15 +95,15 @@ def shipped_files() -> list[Path]:
 def is_shipped_file(path: Path) -> bool:
     """Whether ``path`` names a shipped coefficient file (same resolved path, or the same file through a link)."""
     target = path.resolve()
-    for shipped in shipped_files():
-        if target == shipped.resolve():
-            return True
-        try:
-            if path.exists() and shipped.exists() and os.path.samefile(path, shipped):
-                return True
-        except OSError:
-            continue
-    return False
+    return any(target == shipped.resolve() or _same_file(path, shipped) for shipped in shipped_files())
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    """Whether ``a`` and ``b`` both exist and are one file (a link, a hard link); False where that cannot be told."""
+    try:
+        return a.exists() and b.exists() and os.path.samefile(a, b)
+    except OSError:
+        return False
 
 
 def git_commit() -> str:
@@ -110,12 +111,10 @@ def git_commit() -> str:
     checkout = files.package_dirs()[0].parent
     if not (checkout / "pyproject.toml").is_file():
         return "unknown"
+    git = partial(subprocess.run, cwd=checkout, capture_output=True, text=True)
     try:
-        head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=checkout, capture_output=True, text=True,
-                              check=True).stdout.strip()
-        dirty = subprocess.run(
-            ["git", "status", "--porcelain", "--untracked-files=no"], cwd=checkout, capture_output=True, text=True
-        ).stdout.strip()
+        head = git(["git", "rev-parse", "HEAD"], check=True).stdout.strip()
+        dirty = git(["git", "status", "--porcelain", "--untracked-files=no"]).stdout.strip()
         return head + ("+dirty" if dirty else "")
     except (OSError, subprocess.CalledProcessError):
         return "unknown"
@@ -144,10 +143,8 @@ def check_arguments(parser: argparse.ArgumentParser, args: argparse.Namespace) -
 def check_out(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     """Refuse a missing ``--out``, the shipped file without ``--force``, or any other of the package's own files."""
     if args.out is None:
-        parser.error(
-            "--out is required: name the file to write, e.g. --out /tmp/sky.npz (the shipped "
-            "data/preetham_sh.npz is replaced only with --out data/preetham_sh.npz --force)"
-        )
+        parser.error("--out is required: name the file to write, e.g. --out /tmp/sky.npz (the shipped "
+                     "data/preetham_sh.npz is replaced only with --out data/preetham_sh.npz --force)")
     shipped = is_shipped_file(args.out)
     if shipped and not args.force:
         parser.error(f"--out {args.out} is the shipped coefficient file; add --force to replace it")
@@ -280,12 +277,9 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     check_arguments(parser, args)
     grid = args.grid or (QUICK_GRID if args.quick else (48, 24))
-    settings = fit.FitSettings(
-        bands=args.bands, degrees=args.degrees, grid=grid, colourspace=args.colourspace, method=args.method,
-        samples=args.samples, held_out=QUICK_HELD_OUT if args.quick else 256,
-        validation=16 if args.quick else 128, sun_degrees=args.sun_degrees,
-    )
-
+    settings = fit.FitSettings(bands=args.bands, degrees=args.degrees, grid=grid, colourspace=args.colourspace,
+                               method=args.method, samples=args.samples, held_out=QUICK_HELD_OUT if args.quick else 256,
+                               validation=16 if args.quick else 128, sun_degrees=args.sun_degrees)
     irradiance_held_out = QUICK_IRRADIANCE_HELD_OUT if args.quick else irradiance_fit.FIT_ERROR_POINTS
     total = grid[0] * grid[1] + settings.held_out + 4 + (settings.validation + 4 + 24 if args.tolerance else 0)
     total += grid[0] * grid[1] + irradiance_held_out[0] + 4 + 4 * irradiance_held_out[1]
@@ -298,11 +292,8 @@ def main(argv: list[str] | None = None) -> int:
                 bar.update(1)
                 yield result
 
-        provenance = {
-            "package_version": __version__,
-            "git_commit": git_commit(),
-            "command": "python tools/fit_sky.py " + " ".join(argv if argv is not None else sys.argv[1:]),
-        }
+        command = "python tools/fit_sky.py " + " ".join(argv if argv is not None else sys.argv[1:])
+        provenance = {"package_version": __version__, "git_commit": git_commit(), "command": command}
         sky_table, report, samples = fit.build(settings, tolerance=args.tolerance, mapper=mapper, provenance=provenance)
         bar.set_description("the irradiance's convex problems")
         irradiance_start = time.perf_counter()
@@ -313,10 +304,9 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, OSError) as error:  # CoefficientFileError is a ValueError; an unwritable --out
         parser.error(f"cannot write --out {args.out}: {error}")
     elapsed = time.perf_counter() - start
-    print(f"wrote {path} ({path.stat().st_size / 1024:.1f} KiB) in {elapsed:.1f} s; "
-          f"degrees per band {sky_table.degrees.tolist()}, "
-          f"condition number {sky_table.metadata['condition_number']:.3g}, largest |table value| "
-          f"{float(abs(sky_table.table).max()):.3g} (file bound {coefficient_file.MAX_TABLE_MAGNITUDE:g})")
+    print(f"wrote {path} ({path.stat().st_size / 1024:.1f} KiB) in {elapsed:.1f} s; degrees per band "
+          f"{sky_table.degrees.tolist()}, condition number {sky_table.metadata['condition_number']:.3g}, largest |table "
+          f"value| {float(abs(sky_table.table).max()):.3g} (file bound {coefficient_file.MAX_TABLE_MAGNITUDE:g})")
     print(f"held-out errors ({report['held_out_points']} points incl. the 4 corners; fractions of L_min, worst channel):")
     print("| bands | worst E_mean (eq. 3) | mean E_mean | worst E_max (eq. 2) | worst DC error |")
     print("|---|---|---|---|---|")

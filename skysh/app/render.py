@@ -40,24 +40,17 @@ import os
 import struct
 import zlib
 from pathlib import Path
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from skysh import files
-from skysh.checks import (
-    as_float_array,
-    check_count,
-    check_flag,
-    check_scalar,
-    short_repr,
-)
-from skysh.model import preetham
+from skysh.checks import as_float_array, check_count, check_flag, check_scalar, short_repr
+from skysh.lighting.lights import check_albedo
+from skysh.model import ground, preetham, solar
+from skysh.runtime import SkySH
 from skysh.sh import basis as sh
-
-if TYPE_CHECKING:  # pragma: no cover
-    from skysh.runtime import SkySH
 
 __all__ = ["latlong_dirs", "render_image"]
 
@@ -72,18 +65,16 @@ GLYPH_HEIGHT: int = 7
 
 _FONT: dict[str, str] = {
     # 7 rows of 5 bits (bit 4 = leftmost pixel), two hex digits per row.
-    "0": "0e11131519110e", "1": "040c040404040e", "2": "0e11010204081f", "3": "1f02040201110e",
-    "4": "02060a121f0202", "5": "1f101e0101110e", "6": "0608101e11110e", "7": "1f010204080808",
-    "8": "0e11110e11110e", "9": "0e11110f01020c", "A": "0e1111111f1111", "B": "1e11111e11111e",
-    "C": "0e11101010110e", "D": "1c12111111121c", "E": "1f10101e10101f", "F": "1f10101e101010",
-    "G": "0e11101711110f", "H": "1111111f111111", "I": "0e04040404040e", "J": "0702020202120c",
-    "K": "11121418141211", "L": "1010101010101f", "M": "111b1515111111", "N": "11111915131111",
-    "O": "0e11111111110e", "P": "1e11111e101010", "Q": "0e11111115120d", "R": "1e11111e141211",
-    "S": "0f10100e01011e", "T": "1f040404040404", "U": "1111111111110e", "V": "11111111110a04",
-    "W": "1111111515150a", "X": "11110a040a1111", "Y": "1111110a040404", "Z": "1f01020408101f",
-    " ": "00000000000000", ".": "00000000000c0c", ",": "00000000000c04", "-": "0000001f000000",
-    "+": "0004041f040400", "/": "00010204081000", "(": "02040808080402", ")": "08040202020408",
-    ":": "000c0c000c0c00", "=": "00001f001f0000", "^": "040a1100000000", "*": "0004150e150400",
+    "0": "0e11131519110e", "1": "040c040404040e", "2": "0e11010204081f", "3": "1f02040201110e", "4": "02060a121f0202",
+    "5": "1f101e0101110e", "6": "0608101e11110e", "7": "1f010204080808", "8": "0e11110e11110e", "9": "0e11110f01020c",
+    "A": "0e1111111f1111", "B": "1e11111e11111e", "C": "0e11101010110e", "D": "1c12111111121c", "E": "1f10101e10101f",
+    "F": "1f10101e101010", "G": "0e11101711110f", "H": "1111111f111111", "I": "0e04040404040e", "J": "0702020202120c",
+    "K": "11121418141211", "L": "1010101010101f", "M": "111b1515111111", "N": "11111915131111", "O": "0e11111111110e",
+    "P": "1e11111e101010", "Q": "0e11111115120d", "R": "1e11111e141211", "S": "0f10100e01011e", "T": "1f040404040404",
+    "U": "1111111111110e", "V": "11111111110a04", "W": "1111111515150a", "X": "11110a040a1111", "Y": "1111110a040404",
+    "Z": "1f01020408101f", " ": "00000000000000", ".": "00000000000c0c", ",": "00000000000c04", "-": "0000001f000000",
+    "+": "0004041f040400", "/": "00010204081000", "(": "02040808080402", ")": "08040202020408", ":": "000c0c000c0c00",
+    "=": "00001f001f0000", "^": "040a1100000000", "*": "0004150e150400",
 }
 
 PANEL_WIDTH_RANGE: tuple[int, int] = (16, 4096)
@@ -105,7 +96,6 @@ _TEXT: tuple[int, int, int] = (235, 235, 235)
 _MUTED: tuple[int, int, int] = (150, 150, 150)
 _SUN_RING: tuple[int, int, int] = (255, 60, 0)
 _SUN_OUTLINE: tuple[int, int, int] = (0, 0, 0)
-_GRID: tuple[int, int, int] = (90, 90, 96)
 
 
 def latlong_dirs(width: int) -> NDArray[np.float64]:
@@ -148,10 +138,7 @@ def true_scene(dirs: NDArray[np.float64], sun_zenith: float, turbidity: float, s
     with ``dirs[..., 0]``), so the picture holds the sun's energy whatever its
     resolution (the disk, 0.53 deg across, is smaller than a pixel of most panels).
     """
-    from skysh.lighting import lights
-    from skysh.model import ground, solar
-
-    albedo, sun = lights.check_albedo(ground_albedo), check_flag(sun, "sun")
+    albedo, sun = check_albedo(ground_albedo), check_flag(sun, "sun")
     out = preetham.radiance(dirs, sun_zenith, sun_azimuth, turbidity, colourspace=colourspace)
     e_sun = solar.illuminance_rgb(sun_zenith, turbidity, colourspace) if sun else np.zeros(3)
     if albedo is not None:
@@ -166,11 +153,9 @@ def true_scene(dirs: NDArray[np.float64], sun_zenith: float, turbidity: float, s
 
 def _sun_pixels(dirs: NDArray[np.float64], sun_zenith: float, sun_azimuth: float) -> NDArray[np.bool_]:
     """The pixels of a latitude-longitude panel that show the sun's disk: within its angular radius, or the nearest."""
-    from skysh.model.solar import SUN_ANGULAR_RADIUS
-
     st = math.sin(sun_zenith)
     cos_angle = dirs @ np.array([st * math.cos(sun_azimuth), st * math.sin(sun_azimuth), math.cos(sun_zenith)])
-    mask = cos_angle >= math.cos(SUN_ANGULAR_RADIUS)
+    mask = cos_angle >= math.cos(solar.SUN_ANGULAR_RADIUS)
     if not mask.any():
         mask = cos_angle == cos_angle.max()
     return mask
@@ -200,16 +185,8 @@ def tone_map(rgb: ArrayLike, exposure: float) -> NDArray[np.uint8]:
     return np.clip(np.rint(v * 255.0), 0, 255).astype(np.uint8)
 
 
-def _check_image(image: object, name: str = "image") -> NDArray[np.uint8]:
-    if not isinstance(image, np.ndarray) or image.dtype != np.uint8 or image.ndim != 3 or image.shape[2] != 3:
-        shape = getattr(image, "shape", None)
-        raise ValueError(f"{name} must be an (H, W, 3) numpy array of uint8, got {type(image).__name__} of shape {shape}")
-    return image
-
-
-def draw_text(
-    image: NDArray[np.uint8], text: str, x: int, y: int, scale: int = 1, colour: tuple[int, int, int] = _TEXT
-) -> int:
+def draw_text(image: NDArray[np.uint8], text: str, x: int, y: int, scale: int = 1,
+              colour: tuple[int, int, int] = _TEXT) -> int:
     """
     Draw ``text`` (upper-cased; unknown characters as blanks) with its top-left corner at (x, y), in place.
 
@@ -231,25 +208,23 @@ def draw_text(
     int
         The x just after the text.
     """
-    _check_image(image)
+    if not isinstance(image, np.ndarray) or image.dtype != np.uint8 or image.ndim != 3 or image.shape[2] != 3:
+        shape = getattr(image, "shape", None)
+        raise ValueError(f"image must be an (H, W, 3) numpy array of uint8, got {type(image).__name__} of shape {shape}")
     if not isinstance(text, str):
         raise ValueError(f"text must be a str, got {short_repr(text)}")
     x = check_count(x, "x", -(1 << 30), 1 << 30)
     y = check_count(y, "y", -(1 << 30), 1 << 30)
     scale = check_count(scale, "scale", 1, MAX_TEXT_SCALE)
-    if (
-        not isinstance(colour, (tuple, list, np.ndarray)) or len(colour) != 3
-        or not all(isinstance(c, (int, np.integer)) and not isinstance(c, bool) and 0 <= c <= 255 for c in colour)
-    ):
+    if not isinstance(colour, (tuple, list, np.ndarray)) or len(colour) != 3 or not all(
+            isinstance(c, (int, np.integer)) and not isinstance(c, bool) and 0 <= c <= 255 for c in colour):
         raise ValueError(f"colour must be three integers (R, G, B) in [0, 255], got {short_repr(colour)}")
     return _draw_text(image, text, x, y, scale, tuple(int(c) for c in colour))
 
 
 def _draw_text(image: NDArray[np.uint8], text: str, x: int, y: int, scale: int, colour: tuple[int, ...]) -> int:
     for ch in text.upper():
-        rows = _FONT.get(ch, _FONT[" "])
-        for r in range(GLYPH_HEIGHT):
-            bits = int(rows[2 * r : 2 * r + 2], 16)
+        for r, bits in enumerate(bytes.fromhex(_FONT.get(ch, _FONT[" "]))):  # the glyph's GLYPH_HEIGHT rows
             for c in range(GLYPH_WIDTH):
                 if bits & (1 << (GLYPH_WIDTH - 1 - c)):
                     y0, x0 = y + r * scale, x + c * scale
@@ -285,8 +260,7 @@ def _ring(image: NDArray[np.uint8], cx: float, cy: float, radius: float, box: tu
     width = x1 - x0
     steps = max(64, int(16 * radius))
     a = 2.0 * np.pi * np.arange(steps) / steps
-    rings = [(radius - 1.0, _SUN_OUTLINE), (radius + scale, _SUN_OUTLINE)]
-    rings += [(radius + t, _SUN_RING) for t in range(scale)]
+    rings = [(radius - 1.0, _SUN_OUTLINE), (radius + scale, _SUN_OUTLINE)] + [(radius + t, _SUN_RING) for t in range(scale)]
     for r, colour in rings:
         px = x0 + np.floor(cx + r * np.cos(a)).astype(int) % width
         py = np.floor(cy + r * np.sin(a)).astype(int)
@@ -294,17 +268,9 @@ def _ring(image: NDArray[np.uint8], cx: float, cy: float, radius: float, box: tu
         image[py[keep], px[keep]] = colour
 
 
-def render_image(
-    sky: SkySH,
-    sun_zenith: float,
-    turbidity: float,
-    sun_azimuth: float = 0.0,
-    bands: int = 3,
-    width: int = DEFAULT_PANEL_WIDTH,
-    gibbs: bool = True,
-    sun: bool = False,
-    ground_albedo: ArrayLike = 0.0,
-) -> NDArray[np.uint8]:
+def render_image(sky: SkySH, sun_zenith: float, turbidity: float, sun_azimuth: float = 0.0, bands: int = 3,
+                 width: int = DEFAULT_PANEL_WIDTH, gibbs: bool = True, sun: bool = False,
+                 ground_albedo: ArrayLike = 0.0) -> NDArray[np.uint8]:
     """
     The sky, its SH reconstruction and the SH irradiance, side by side, labelled.
 
@@ -357,10 +323,8 @@ def render_image(
     albedo = np.atleast_1d(np.asarray(ground_albedo, dtype=np.float64))
     scene = (", SUN" if lights["sun"] else "") + (
         f", GROUND ALBEDO {' '.join(f'{a:g}' for a in albedo)}" if albedo.any() else "")
-    title = (
-        f"SUN ZENITH {math.degrees(sun_zenith):.1f} DEG, AZIMUTH {math.degrees(sun_azimuth):.1f} DEG, "
-        f"TURBIDITY {turbidity:g}, {bands} BAND{'' if bands == 1 else 'S'}{'' if gibbs else ', NO GIBBS'}{scene}"
-    )
+    title = (f"SUN ZENITH {math.degrees(sun_zenith):.1f} DEG, AZIMUTH {math.degrees(sun_azimuth):.1f} DEG, "
+             f"TURBIDITY {turbidity:g}, {bands} BAND{'' if bands == 1 else 'S'}{'' if gibbs else ', NO GIBBS'}{scene}")
     labels = _LABELS if scene == "" else (_LABELS[0], ("SKY, SUN, GROUND",) + _LABELS[1][1:])
     return _compose(panels, exposure, title, width, sun_zenith, sun_azimuth, labels)
 
@@ -430,8 +394,7 @@ def _compose(panels: tuple[NDArray, ...], exposure: float, title: str, width: in
     lay = _layout(width, title)
     scale, top, height, radius = lay.scale, lay.top, lay.height, lay.radius
     tick, line, margin = 3 * scale, (GLYPH_HEIGHT + 4) * scale, 4 * scale
-    image = np.empty(lay.size + (3,), dtype=np.uint8)
-    image[...] = _BACKGROUND
+    image = np.full(lay.size + (3,), _BACKGROUND, dtype=np.uint8)
     _draw_text(image, title, margin, margin, scale, _TEXT)
     sun_x = (math.remainder(sun_azimuth, 2.0 * math.pi) + math.pi) / (2.0 * math.pi) * width
     sun_y = sun_zenith / math.pi * height

@@ -29,9 +29,9 @@ Everything it computes comes from skysh, generated when the files are written:
 -   The true sky (Preetham 1999, appendix), evaluated per pixel in the fragment
     shader and in double precision on the CPU, takes its constants from
     :mod:`skysh.model.preetham`: the Perez tables, the zenith-chromaticity matrices,
-    the zenith-luminance formula (read off ``preetham.zenith_luminance_unchecked`` by
-    evaluating it, see :func:`zenith_luminance_form`) and the XYZ -> RGB matrix
-    of the coefficient file's colourspace.
+    and the XYZ -> RGB matrix of the coefficient file's colourspace; the zenith luminance
+    is the exported JavaScript runtime's own (``zenithLuminance``, written once in
+    ``skysh/export/templates/js_module.mjs``), handed to the page with the runtime.
 -   The SH basis uses :mod:`skysh.sh.basis`'s recurrence constants; the tone mapping
     :mod:`skysh.app.render`'s key.
 -   The engine snippets are :func:`skysh.engines.presets.snippet` turned into templates
@@ -69,18 +69,25 @@ import re
 import socket
 import sys
 import threading
-from functools import partial
+import webbrowser
+from functools import partialmethod
 from pathlib import Path
 from string import Template
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from skysh import files
-
-if TYPE_CHECKING:  # pragma: no cover
-    from skysh.runtime import SkySH
+from skysh._version import __version__
+from skysh.app import render
+from skysh.engines import presets as engines
+from skysh.export.c_like import export_source
+from skysh.lighting import sunlight
+from skysh.literals import double_literal, suffixed_literal
+from skysh.model import preetham
+from skysh.runtime import SkySH
+from skysh.sh import basis as sh
 
 __all__ = []
 
@@ -93,9 +100,11 @@ PAGE_FILES: tuple[str, ...] = ("index.html", "viewer.css", "sky.js", "shaders.js
 _STATIC_SOURCES: tuple[str, ...] = ("viewer.css", "sky.js", "shaders.js", "viewer.js")
 """Files copied from :data:`WEB_DIR` unchanged; ``index.html`` is generated from its template."""
 
-_CONTENT_TYPES: dict[str, str] = {
-    ".html": "text/html; charset=utf-8", ".css": "text/css; charset=utf-8", ".js": "text/javascript; charset=utf-8",
-}
+_CONTENT_TYPES: dict[str, str] = {".html": "text/html; charset=utf-8", ".css": "text/css; charset=utf-8",
+                                   ".js": "text/javascript; charset=utf-8"}
+
+_HEADERS: dict[str, str] = {"Cache-Control": "no-store", "X-Content-Type-Options": "nosniff", "Referrer-Policy": "no-referrer"}
+"""Headers of every answer besides its type, length and :data:`_CSP`: never cached, never sniffed, no referrer."""
 
 LOOPBACK_HOSTS: tuple[str, ...] = ("127.0.0.1", "::1", "localhost")
 """Host names :func:`serve` accepts (any other address in 127.0.0.0/8 too); anything else is refused."""
@@ -131,81 +140,17 @@ ERROR_RULE_PHI: int = 48
 _SNIPPET_SEED: int = 16
 """Seed of the random radiance coefficients the snippet templates are read from (any seed works)."""
 
-_ZENITH_CHECK_TOLERANCE: float = 1e-12
-"""Largest relative difference allowed between :func:`zenith_luminance_form` and
-``preetham.zenith_luminance`` over the model's domain: rounding of a few double operations."""
-
-_CSP: str = (
-    "default-src 'none'; script-src 'self' '$script_hash'; style-src 'self'; img-src 'self' data:; "
-    "connect-src 'none'; base-uri 'none'; form-action 'none'"
-)
+_CSP: str = ("default-src 'none'; script-src 'self' '$script_hash'; style-src 'self'; img-src 'self' data:; "
+             "connect-src 'none'; base-uri 'none'; form-action 'none'")
 """The page's Content-Security-Policy: its own files and its one inline module script, nothing else."""
 
 
 # --------------------------------------------------------------------------- #
 # Constants generated from skysh
 # --------------------------------------------------------------------------- #
-class _TanProbe:
-    """``ops`` for ``preetham.zenith_luminance_unchecked``: records the tan argument, returns a chosen value."""
-
-    def __init__(self, value: float) -> None:
-        self.value = value
-        self.chi: list[float] = []
-
-    def tan(self, chi: float) -> float:
-        self.chi.append(chi)
-        return self.value
-
-
-def zenith_luminance_form() -> dict[str, float]:
-    """
-    The constants of Preetham's zenith luminance, read off :mod:`skysh.model.preetham` by evaluation.
-
-    ``Y_z = (a T + b) tan(chi) + c T + d`` cd/m^2 with ``chi = (chi0 + chi1 T) (pi - 2 ts)``
-    (Preetham 1999, appendix). ``preetham.zenith_luminance_unchecked`` keeps its numbers inline; it is
-    affine in ``tan(chi)`` and in T, so four evaluations with a ``tan`` that returns 0 or 1
-    give a..d, and the recorded tan arguments give chi0 and chi1.
-
-    Returns
-    -------
-    dict
-        Keys ``a, b, c, d`` (cd/m^2) and ``chi0, chi1``.
-
-    Raises
-    ------
-    RuntimeError
-        When the form no longer reproduces ``preetham.zenith_luminance`` to
-        :data:`_ZENITH_CHECK_TOLERANCE` over a grid of the model's domain.
-    """
-    from skysh.model import preetham
-
-    def value(t: float, tan: float) -> float:
-        return float(preetham.zenith_luminance_unchecked(0.0, t, _TanProbe(tan)))
-
-    d = value(0.0, 0.0)
-    c = value(1.0, 0.0) - d
-    b = value(0.0, 1.0) - d
-    a = value(1.0, 1.0) - d - c - b
-    probe = _TanProbe(0.0)
-    preetham.zenith_luminance_unchecked(0.0, 0.0, probe)
-    preetham.zenith_luminance_unchecked(0.0, 1.0, probe)
-    chi0 = probe.chi[0] / math.pi
-    chi1 = probe.chi[1] / math.pi - chi0
-    form = {"a": a, "b": b, "c": c, "d": d, "chi0": chi0, "chi1": chi1}
-    ts, t = np.meshgrid(np.linspace(0.0, math.pi / 2.0, 19), np.linspace(*preetham.TURBIDITY_RANGE, 17))
-    chi = (chi0 + chi1 * t) * (math.pi - 2.0 * ts)
-    mine = (a * t + b) * np.tan(chi) + c * t + d
-    truth = preetham.zenith_luminance(ts, t)
-    if not np.all(np.abs(mine - truth) <= _ZENITH_CHECK_TOLERANCE * np.abs(truth)):
-        raise RuntimeError("skysh.model.preetham's zenith luminance is no longer of the form the viewer evaluates")
-    return form
-
-
-_NUMBER_FORMATS: dict[str, Any] = {
-    "js": lambda x: repr(float(x)),  # JavaScript: the shortest round-trip text (Python's repr)
-    "f32": lambda x: repr(float(x)) + "f",  # C++ / C#: that text with the float suffix
-}
-"""How :func:`skysh.engines.presets.snippet` writes a number; the page's ``sky.js`` implements both."""
+_NUMBER_FORMATS: dict[str, Any] = {"js": double_literal, "f32": suffixed_literal}
+"""How :func:`skysh.engines.presets.snippet` writes a number: ``js`` (JavaScript) the shortest round-trip text
+(Python's repr), ``f32`` (C++ / C#) that text with the float suffix; the page's ``sky.js`` implements both."""
 
 _NUMBER_TOKEN: re.Pattern[str] = re.compile(r"(?<![\w.])-?\d+(?:\.\d+)?(?:e[+-]\d+)?f?(?![\w.])")
 """A number as a snippet writes it (with its sign and an optional float suffix)."""
@@ -248,8 +193,6 @@ def _same_snippet(a: str, b: str, scale: float) -> bool:
 
 def _template(engine: str, bands: int, rng: np.random.Generator) -> str:
     """One snippet template: ``{{k:fmt}}`` where the k-th engine value is written with format fmt."""
-    from skysh.engines import presets as engines
-
     v1, v2 = rng.standard_normal((2, bands * bands, 3)) * 1000.0
     e1, e2 = (engines.convert(v, engine).ravel() for v in (v1, v2))
     scale = _TEMPLATE_MATCH * max(float(np.max(np.abs(np.concatenate([e1, e2])))), 1.0)
@@ -260,10 +203,8 @@ def _template(engine: str, bands: int, rng: np.random.Generator) -> str:
         if len(found) != 1:
             raise RuntimeError(f"skysh.engines.presets.snippet({engine!r}) writes value {k} {len(found)} times; expected once")
         where[int(found[0])] = int(k)
-    marks = [
-        f"{{{{{where[i]}:{fmt}}}}}" if i in where else _NUMBER_FORMATS[fmt](value)
-        for i, (fmt, value) in enumerate(zip(formats, values, strict=True))
-    ]
+    marks = [f"{{{{{where[i]}:{fmt}}}}}" if i in where else _NUMBER_FORMATS[fmt](value)
+             for i, (fmt, value) in enumerate(zip(formats, values, strict=True))]
     template = parts[0] + "".join(mark + part for mark, part in zip(marks, parts[1:], strict=True))
     if not _same_snippet(fill_snippet(template, e2), engines.snippet(v2, engine), scale):
         raise RuntimeError(f"the snippet template of {engine!r} does not reproduce skysh.engines.presets.snippet")
@@ -293,8 +234,6 @@ def snippet_templates(max_bands: int) -> dict[str, dict[str, str]]:
         is the snippet's own text. Each template is checked: filled with a second set of
         values in Python, it must equal ``engines.snippet`` of those values.
     """
-    from skysh.engines import presets as engines
-
     rng = np.random.default_rng(_SNIPPET_SEED)
     return {
         engine: {str(n): _template(engine, n, rng) for n in range(1, min(max_bands, engines.ENGINE_MAX_BANDS[engine]) + 1)}
@@ -312,9 +251,6 @@ def _rgb_from_xyz(sky: SkySH) -> NDArray[np.float64]:
     """The file's XYZ -> linear RGB matrix: the one its sun table records (colour-science's for the file's
     colourspace, ``tests/lighting/test_sunlight.py``), so building the page needs no colour-science import; for a
     file without a sun table, colour-science's."""
-    from skysh.lighting import sunlight
-    from skysh.model import preetham
-
     if "sun" in sky.table.tables:
         return np.asarray(sunlight.SunLight(sky.table).rgb_from_xyz, dtype=np.float64)
     return preetham.rgb_from_xyz_matrix(sky.colourspace)
@@ -329,12 +265,6 @@ def page_config(sky: SkySH) -> dict[str, Any]:
     sky
         The loaded runtime whose coefficient file the page's runtime is exported from.
     """
-    from skysh._version import __version__
-    from skysh.app import render
-    from skysh.engines import presets as engines
-    from skysh.model import preetham
-    from skysh.sh import basis as sh
-
     recurrence = sh.basis_recurrence(sky.bands)
     return {
         "version": __version__,
@@ -343,7 +273,6 @@ def page_config(sky: SkySH) -> dict[str, Any]:
         "perez": {"x": preetham.PEREZ_X.tolist(), "y": preetham.PEREZ_YC.tolist(), "Y": preetham.PEREZ_Y.tolist()},
         "zenithX": preetham.ZENITH_X_MATRIX.tolist(),
         "zenithY": preetham.ZENITH_Y_MATRIX.tolist(),
-        "zenithLuminance": zenith_luminance_form(),
         "xyzToRgb": _rgb_from_xyz(sky).tolist(),
         "shRecurrence": {"diag": recurrence.diag.tolist(), "a": recurrence.a.tolist(), "b": recurrence.b.tolist()},
         "lobe": sh.cosine_lobe(sky.bands).tolist(),
@@ -358,11 +287,6 @@ def page_config(sky: SkySH) -> dict[str, Any]:
 # --------------------------------------------------------------------------- #
 # The files
 # --------------------------------------------------------------------------- #
-def _script_text(text: str) -> str:
-    """JSON ``text`` safe inside an HTML <script> element: every '<' escaped, so nothing can end it early."""
-    return text.replace("<", "\\u003c")
-
-
 def page_files(sky: SkySH | None = None) -> dict[str, bytes]:
     """
     The page's files, generated in memory.
@@ -377,30 +301,19 @@ def page_files(sky: SkySH | None = None) -> dict[str, bytes]:
     dict
         ``{name: content}`` for every name of :data:`PAGE_FILES`.
     """
-    from skysh._version import __version__
-    from skysh.export.c_like import export_source
-    from skysh.runtime import SkySH
-
     sky = SkySH.load() if sky is None else sky
     module = export_source(sky, "js", bands=None)
     if "</script" in module.lower() or "<!--" in module:  # text that would end the element early
         raise RuntimeError("the JavaScript runtime contains '</script' or '<!--' and cannot be inlined")
-    runtime = module + (
-        "\n// The viewer (viewer.js, a classic script run before this module) takes the runtime from here.\n"
-        "globalThis.skyshViewer.start({ coefficients, engineLayout, ENGINES, MAX_BANDS, SKYSH_VERSION,"
-        " SUN_ZENITH_DOMAIN, TURBIDITY_DOMAIN });\n"
-    )
+    runtime = module + ("\n// The viewer (viewer.js, a classic script run before this module) takes the runtime from here.\n"
+                        "globalThis.skyshViewer.start({ coefficients, engineLayout, ENGINES, MAX_BANDS, SKYSH_VERSION,"
+                        " SUN_ZENITH_DOMAIN, TURBIDITY_DOMAIN, zenithLuminance });\n")
     digest = base64.b64encode(hashlib.sha256(runtime.encode("utf-8")).digest()).decode("ascii")
     config = json.dumps(page_config(sky), separators=(",", ":"), allow_nan=False)
     index = Template((WEB_DIR / "index.html").read_text(encoding="utf-8")).substitute(
-        csp=Template(_CSP).substitute(script_hash=f"sha256-{digest}"),
-        config=_script_text(config),
-        runtime=runtime,
-        version=__version__,
-    )
-    files = {"index.html": index.encode("utf-8")}
-    files.update({name: (WEB_DIR / name).read_bytes() for name in _STATIC_SOURCES})
-    return files
+        csp=Template(_CSP).substitute(script_hash=f"sha256-{digest}"), runtime=runtime, version=__version__,
+        config=config.replace("<", "\\u003c"))  # every '<' escaped: nothing can end the <script> element early
+    return {"index.html": index.encode("utf-8"), **{name: (WEB_DIR / name).read_bytes() for name in _STATIC_SOURCES}}
 
 
 def content_security_policy(index_html: bytes) -> str:
@@ -440,20 +353,14 @@ def write_static(out_dir: str | Path, sky: SkySH | None = None) -> list[Path]:
 # --------------------------------------------------------------------------- #
 class _Handler(http.server.BaseHTTPRequestHandler):
     """GET / HEAD of the page's files from memory; 404 for any other path. One request per connection (HTTP/1.0);
-    a connection silent for ``timeout`` seconds is closed (http.server drops it quietly)."""
+    a connection silent for ``timeout`` seconds is closed (http.server drops it quietly). :func:`make_server`
+    gives each server a subclass holding its ``files``, ``csp`` and ``timeout``."""
 
     server_version = "skysh-viewer"
     sys_version = ""
-
-    def __init__(self, *args: Any, files: dict[str, tuple[bytes, str]], csp: str, timeout: float, **kwargs: Any) -> None:
-        self.files = files
-        self.csp = csp
-        self.idle_timeout = timeout
-        super().__init__(*args, **kwargs)
-
-    def setup(self) -> None:
-        super().setup()
-        self.connection.settimeout(self.idle_timeout)  # every read and write; http.server drops a timed-out connection
+    files: dict[str, tuple[bytes, str]]  # name -> (content, Content-Type)
+    csp: str  # the Content-Security-Policy header
+    # ``timeout`` (seconds): socketserver's StreamRequestHandler sets it on the connection, every read and write
 
     def _host_allowed(self) -> bool:
         """Refuse a Host header naming anything but loopback (DNS-rebinding guard)."""
@@ -461,13 +368,11 @@ class _Handler(http.server.BaseHTTPRequestHandler):
         if host is None:
             return True
         name = host.rsplit(":", 1)[0] if not host.endswith("]") else host
-        name = name.strip("[]").lower()
-        if name == "localhost":
-            return True
         try:
-            return ipaddress.ip_address(name).is_loopback
+            _loopback(name.strip("[]"))
         except ValueError:
             return False
+        return True
 
     def _respond(self, body: bool) -> None:
         path = self.path.split("?", 1)[0].split("#", 1)[0]
@@ -482,21 +387,16 @@ class _Handler(http.server.BaseHTTPRequestHandler):
 
     def _send(self, status: int, content: bytes, content_type: str, body: bool) -> None:
         self.send_response(status)
-        self.send_header("Content-Type", content_type)
-        self.send_header("Content-Length", str(len(content)))
-        self.send_header("Cache-Control", "no-store")
-        self.send_header("X-Content-Type-Options", "nosniff")
-        self.send_header("Referrer-Policy", "no-referrer")
-        self.send_header("Content-Security-Policy", self.csp)
+        headers = {"Content-Type": content_type, "Content-Length": str(len(content)), **_HEADERS,
+                   "Content-Security-Policy": self.csp}
+        for key, value in headers.items():
+            self.send_header(key, value)
         self.end_headers()
         if body:
             self.wfile.write(content)
 
-    def do_GET(self) -> None:  # http.server's name
-        self._respond(True)
-
-    def do_HEAD(self) -> None:
-        self._respond(False)
+    do_GET = partialmethod(_respond, True)  # http.server's names: GET answers with the body, HEAD without
+    do_HEAD = partialmethod(_respond, False)
 
     def log_message(self, format: str, *args: Any) -> None:  # http.server's signature
         pass  # quiet: the command prints its address and nothing per request
@@ -511,6 +411,7 @@ class _Server(http.server.ThreadingHTTPServer):
     def __init__(self, address: tuple[str, int], handler: Any, max_connections: int) -> None:
         self._slots = threading.BoundedSemaphore(max_connections)
         self._stopping = threading.Event()
+        self.address_family = socket.AF_INET6 if ":" in address[0] else socket.AF_INET  # the socket is made next
         super().__init__(address, handler)
 
     def process_request(self, request: Any, client_address: Any) -> None:
@@ -547,10 +448,6 @@ class _Server(http.server.ThreadingHTTPServer):
         super().shutdown()
 
 
-class _Server6(_Server):
-    address_family = socket.AF_INET6
-
-
 def _loopback(host: str) -> str:
     """The numeric loopback address of ``host``, or a ValueError."""
     if isinstance(host, str) and host.lower() == "localhost":
@@ -574,10 +471,8 @@ def _check_limits(port: int, timeout: float, max_connections: int) -> None:
         raise ValueError(f"max_connections must be an integer >= 1, got {max_connections!r}")
 
 
-def make_server(
-    host: str = "127.0.0.1", port: int = 0, sky: SkySH | None = None, timeout: float = IDLE_TIMEOUT_S,
-    max_connections: int = MAX_CONNECTIONS,
-) -> http.server.ThreadingHTTPServer:
+def make_server(host: str = "127.0.0.1", port: int = 0, sky: SkySH | None = None, timeout: float = IDLE_TIMEOUT_S,
+                max_connections: int = MAX_CONNECTIONS) -> http.server.ThreadingHTTPServer:
     """
     A bound (not yet running) HTTP server of the page on loopback.
 
@@ -608,14 +503,9 @@ def make_server(
     _check_limits(port, timeout, max_connections)
     files = page_files(sky)
     table = {name: (content, _CONTENT_TYPES[Path(name).suffix]) for name, content in files.items()}
-    handler = partial(_Handler, files=table, csp=content_security_policy(files["index.html"]), timeout=float(timeout))
-    server_class = _Server6 if ":" in address else _Server
-    return server_class((address, port), handler, max_connections)
-
-
-def _url(server: http.server.ThreadingHTTPServer) -> str:
-    host, port = str(server.server_address[0]), int(server.server_address[1])
-    return f"http://[{host}]:{port}/" if ":" in host else f"http://{host}:{port}/"
+    handler = type("_PageHandler", (_Handler,), {"files": table, "csp": content_security_policy(files["index.html"]),
+                                                 "timeout": float(timeout)})
+    return _Server((address, port), handler, max_connections)
 
 
 def serve(host: str = "127.0.0.1", port: int = 0, open_browser: bool = False, sky: SkySH | None = None) -> None:
@@ -644,11 +534,10 @@ def serve(host: str = "127.0.0.1", port: int = 0, open_browser: bool = False, sk
     server: http.server.ThreadingHTTPServer | None = None
     try:
         server = make_server(host, port, sky)  # a Ctrl-C while the page is generated also stops quietly
-        url = _url(server)
+        address, bound = str(server.server_address[0]), int(server.server_address[1])
+        url = f"http://[{address}]:{bound}/" if ":" in address else f"http://{address}:{bound}/"
         print(f"skysh viewer: {url} (Ctrl-C to stop)", flush=True)
         if open_browser:
-            import webbrowser
-
             webbrowser.open(url)
         server.serve_forever()
     except KeyboardInterrupt:

@@ -35,10 +35,8 @@ and the coefficient file reader only (not colour-science or :mod:`skysh.model.so
 
 References
 ----------
--   Preetham, A. J., Shirley, P., Smits, B. (1999). A Practical Analytic Model
-    for Daylight. SIGGRAPH 1999, appendix (the attenuated sun).
--   Kasten, F. (1966). A new table and approximation formula for the relative
-    optical air mass. Arch. Meteorol. Geophys. Bioklimatol. B 14.
+The table's model and air mass: Preetham, Shirley, Smits (1999), appendix, and
+Kasten (1966), as :mod:`skysh.table.sun_table` cites them.
 """
 
 from __future__ import annotations

@@ -107,11 +107,6 @@ RULE_ADEQUACY: float = 0.01
 """The page's 24 x 48 rule against a dense one (96 x 192 nodes), relative: measured 0.33% at
 worst over the settings of the test (the sky's kink at the sun limits the rule)."""
 
-ZENITH_FORM_RTOL: float = 1e-13
-"""The page's zenith-luminance form (a (T) + b) tan(chi) + c T + d, its coefficients fitted from
-skysh.model.preetham.zenith_luminance) against that function: the same affine-in-T expression, a few
-ulp apart on values of a few thousand cd/m^2 (tan(chi) amplifies by <= ~10 in the domain)."""
-
 SUN_COLUMN_FRACTION: float = 0.02
 """Brightest-pixel centroid vs the sun's azimuth, as a fraction of the panel width: 7.2 degrees, the
 centroid of the brightest 0.2% of pixels sits within a few pixels of the sun's disk and glow."""
@@ -348,6 +343,7 @@ def _own_files_only(requests: list[str], base: str) -> None:
     assert requests and set(requests) <= names, f"requests outside the page's files: {set(requests) - names}"
 
 
+@pytest.mark.integration
 def test_loads_from_file_without_errors(loaded: Loaded, static_dir: Path) -> None:
     assert loaded.problems == []
     _own_files_only(loaded.requests, static_dir.as_uri() + "/")
@@ -355,6 +351,7 @@ def test_loads_from_file_without_errors(loaded: Loaded, static_dir: Path) -> Non
     assert state is not None and state["bands"] == 3
 
 
+@pytest.mark.integration
 def test_loads_from_server_without_errors(served: Loaded, server: Any, loaded: Loaded, sky: SkySH) -> None:
     """The page from the server, set by hand (Playwright's fill and a real click on a checkbox)."""
     host, port = server.server_address[:2]
@@ -378,6 +375,7 @@ def test_content_security_policy_forbids_the_network(static_dir: Path) -> None:
 # --------------------------------------------------------------------------- #
 # What is drawn
 # --------------------------------------------------------------------------- #
+@pytest.mark.integration
 def test_every_panel_is_drawn(loaded: Loaded) -> None:
     loaded.set()
     for name in ("fisheye-sky", "fisheye-sh", "scene", "latlong-sky", "latlong-sh"):
@@ -387,6 +385,7 @@ def test_every_panel_is_drawn(loaded: Loaded) -> None:
         assert np.mean(pixels.sum(axis=-1) > 30) > 0.45, name  # mostly lit (the fisheye's corners are empty)
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize("setting", [
     {"sun_zenith": 30.0, "sun_azimuth": 40.0, "turbidity": 3.0},
     {"sun_zenith": 88.0, "sun_azimuth": -120.0, "turbidity": 2.5, "ev": 1.5},
@@ -401,6 +400,7 @@ def test_true_sky_pixels_equal_python(loaded: Loaded, setting: dict[str, Any]) -
     assert np.abs(pixels - render.tone_map(turned, state["exposure"])).max() > PIXEL_TOLERANCE  # negative control
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize("setting", [
     {"bands": 3, "gibbs": True},
     {"bands": 7, "gibbs": False, "sun_zenith": 75.0, "sun_azimuth": 100.0, "turbidity": 5.0},
@@ -415,6 +415,7 @@ def test_sh_pixels_equal_python(loaded: Loaded, sky: SkySH, setting: dict[str, A
     assert np.abs(pixels - render.tone_map(sh.evaluate(turned, dirs), state["exposure"])).max() > PIXEL_TOLERANCE
 
 
+@pytest.mark.integration
 def test_negative_radiance_is_marked_magenta(loaded: Loaded, sky: SkySH) -> None:
     state = loaded.set(bands=7, gibbs=False, sun_zenith=88.0, turbidity=2.5)
     pixels = loaded.panel("latlong-sh").astype(int)
@@ -430,6 +431,7 @@ def test_negative_radiance_is_marked_magenta(loaded: Loaded, sky: SkySH) -> None
     assert np.abs(pixels[positive] - render.tone_map(values, state["exposure"])[positive]).max() <= PIXEL_TOLERANCE
 
 
+@pytest.mark.integration
 def test_midday_sky_is_blue_and_sunset_is_red_near_the_sun(loaded: Loaded) -> None:
     loaded.set(sun_zenith=20.0, turbidity=3.0)
     for name in ("latlong-sky", "latlong-sh"):
@@ -453,6 +455,7 @@ def _brightest(pixels: np.ndarray) -> tuple[float, float]:
     return float(rows.mean()), float(cols.mean())
 
 
+@pytest.mark.integration
 def test_sun_sliders_move_the_brightest_pixel_to_the_sun(loaded: Loaded) -> None:
     positions = []
     for zenith, azimuth in ((40.0, 0.0), (40.0, 90.0), (65.0, 90.0)):
@@ -468,6 +471,7 @@ def test_sun_sliders_move_the_brightest_pixel_to_the_sun(loaded: Loaded) -> None
     assert positions[2][0] - positions[1][0] > SLIDER_MOVE_ROWS * height  # the zenith slider moved it down
 
 
+@pytest.mark.integration
 def test_a_control_change_is_drawn_by_the_next_frame(loaded: Loaded) -> None:
     loaded.set()
     result = loaded.page.evaluate("""async () => {
@@ -510,6 +514,7 @@ def _dc_error(shown: np.ndarray, expected: np.ndarray) -> float:
     return float(np.max(np.abs(shown - expected) / np.abs(expected[0])))
 
 
+@pytest.mark.integration
 def test_coefficients_shown_equal_the_python_runtime(loaded: Loaded, sky: SkySH) -> None:
     tables = 0
     for setting in _settings(12, seed=16, dering_bands=loaded.page.evaluate("skyshViewer.deringBands")):
@@ -537,6 +542,7 @@ def test_coefficients_shown_equal_the_python_runtime(loaded: Loaded, sky: SkySH)
     assert tables >= 1  # the default of 3-band irradiance (the table) is among the settings
 
 
+@pytest.mark.integration
 def test_scene_irradiance_is_the_runtimes(loaded: Loaded, sky: SkySH) -> None:
     """The sphere-and-ground panel draws the runtime's irradiance (the certified table by intent at 3 bands, the
     old pipeline with the box unticked); A_l times the radiance shown, what the page drew before, must fail."""
@@ -560,6 +566,7 @@ ENGINE_CASES = [
 largest band count (all its terms), the full run every band count (two page draws each)."""
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize(("engine", "bands"), ENGINE_CASES)
 def test_engine_values_and_snippets_equal_python(loaded: Loaded, sky: SkySH, engine: str, bands: int) -> None:
     state = loaded.set(engine=engine, bands=bands, sun_zenith=55.3, sun_azimuth=-20.5, turbidity=3.7)
@@ -575,12 +582,14 @@ def test_engine_values_and_snippets_equal_python(loaded: Loaded, sky: SkySH, eng
     assert not viewer._same_snippet(loaded.readout(), engines.snippet(1.001 * radiance, engine), DC_TOLERANCE * scale)
 
 
+@pytest.mark.integration
 def test_engine_band_limit_is_reported(loaded: Loaded) -> None:
     loaded.set(engine="threejs", bands=7)
     text = loaded.readout()
     assert text.startswith("// ") and "bands" in text
 
 
+@pytest.mark.integration
 def test_copy_button_reports_what_it_did(loaded: Loaded) -> None:
     loaded.set()
     loaded.page.locator("#copy").click()
@@ -590,6 +599,7 @@ def test_copy_button_reports_what_it_did(loaded: Loaded) -> None:
     )
 
 
+@pytest.mark.integration
 def test_number_format_equals_python_repr(loaded: Loaded) -> None:
     rng = np.random.default_rng(7)
     values = [0.0, -0.0, 1.0, -2.5, 1e-4, 1e-5, 9.999e-5, 1e16, 1e15, 9999999999999998.0, 123456789.0, 5e-324,
@@ -598,6 +608,7 @@ def test_number_format_equals_python_repr(loaded: Loaded) -> None:
     assert loaded.page.evaluate("(v) => skyshViewer.pyRepr(v)", values) == [repr(float(v)) for v in values]
 
 
+@pytest.mark.integration
 def test_cpu_sky_and_basis_equal_python(loaded: Loaded) -> None:
     rng = np.random.default_rng(3)
     dirs = rng.standard_normal((400, 3))
@@ -629,6 +640,7 @@ def _errors(state: dict[str, Any], coeffs: np.ndarray, n_mu: int, n_phi: int) ->
     return math.sqrt(error / norm), math.sqrt(below / norm)
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize("setting", [
     {"sun_zenith": 30.0, "bands": 3},
     {"sun_zenith": 86.0, "sun_azimuth": 77.0, "turbidity": 2.5, "bands": 7, "gibbs": False},
@@ -644,6 +656,7 @@ def test_error_numbers_equal_python(loaded: Loaded, sky: SkySH, setting: dict[st
         assert abs(page - converged) <= RULE_ADEQUACY * converged
 
 
+@pytest.mark.integration
 @pytest.mark.slow  # pictures for people (build/viewer-shots/); that every panel is drawn is test_every_panel_is_drawn
 def test_screenshots_at_three_settings(browser: Any, static_dir: Path) -> None:
     startup = shots.save_screenshots(browser, (static_dir / "index.html").as_uri(), shots.DEFAULT_OUT)
@@ -656,18 +669,6 @@ def test_screenshots_at_three_settings(browser: Any, static_dir: Path) -> None:
 # --------------------------------------------------------------------------- #
 # Generated constants
 # --------------------------------------------------------------------------- #
-def test_zenith_luminance_form_follows_preetham(monkeypatch: pytest.MonkeyPatch) -> None:
-    form = viewer.zenith_luminance_form()
-    ts, t = np.meshgrid(np.linspace(0.05, 1.5, 7), np.linspace(2.0, 9.0, 5))
-    chi = (form["chi0"] + form["chi1"] * t) * (math.pi - 2.0 * ts)
-    mine = (form["a"] * t + form["b"]) * np.tan(chi) + form["c"] * t + form["d"]
-    assert np.allclose(mine, preetham.zenith_luminance(ts, t), rtol=ZENITH_FORM_RTOL, atol=0.0)
-    original = preetham.zenith_luminance_unchecked
-    monkeypatch.setattr(preetham, "zenith_luminance_unchecked", lambda ts, t, ops=math: original(ts, t, ops) + 1e-3 * t * t)
-    with pytest.raises(RuntimeError, match="zenith luminance"):  # a model change is noticed, not copied wrongly
-        viewer.zenith_luminance_form()
-
-
 def test_snippet_templates_follow_engines(monkeypatch: pytest.MonkeyPatch) -> None:
     templates = viewer.snippet_templates(7)
     assert set(templates) == set(engines.ENGINES)
@@ -855,6 +856,7 @@ def _closed_after(sock: socket.socket, start: float) -> float:
     return time.monotonic() - start
 
 
+@pytest.mark.integration
 def test_server_closes_idle_connections_after_its_timeout(sky: SkySH, server: Any, capfd: pytest.CaptureFixture[str]) -> None:
     with _running(sky, timeout=SHORT_TIMEOUT_S, max_connections=2) as srv, \
             concurrent.futures.ThreadPoolExecutor(1) as pool, _connect(server) as patient:
@@ -1065,6 +1067,7 @@ def _rounded(values: np.ndarray, dc: float) -> np.ndarray:
     return np.where(np.abs(values) < NOISE_FLOOR * dc, 0.0, values) + 0.0
 
 
+@pytest.mark.integration
 def test_readout_rule_on_chosen_numbers(node_readouts: dict[str, Any]) -> None:
     assert node_readouts["floor"] == NOISE_FLOOR
     expected = _rounded(np.array(HAND_VALUES), 2.0).tolist()
@@ -1077,6 +1080,7 @@ def _tokens(item: Any) -> list[str]:
     return [token for part in item for token in _tokens(part)] if isinstance(item, list) else [item]
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize("k", range(len(READOUT_STATES)))
 def test_readout_prints_rotation_noise_as_zero(node_readouts: dict[str, Any], sky: SkySH, k: int) -> None:
     state, text = READOUT_STATES[k], node_readouts["readouts"][k]

@@ -1,7 +1,8 @@
 // skysh viewer: the CPU side of the page, in double precision, no DOM (it also runs under node).
 // The true Preetham sky (1999, appendix), the real SH basis (skysh.sh.basis's recurrence), the error
 // numbers, the number formats of the engine snippets and the read-out text. Every constant comes from the page's
-// configuration, which skysh.app.viewer generates from skysh.model.preetham, skysh.sh.basis and skysh.engines.presets.
+// configuration, which skysh.app.viewer generates from skysh.model.preetham, skysh.sh.basis and skysh.engines.presets;
+// the zenith luminance is the page's JavaScript runtime's own (skysh.export.js's module: the formula written once).
 "use strict";
 
 (function () {
@@ -32,8 +33,15 @@
     return sum;
   }
 
-  function create(config) {
-    const zl = config.zenithLuminance;
+  /**
+   * The sky's CPU side for config (skysh.app.viewer.page_config) and runtime, the page's JavaScript runtime (the
+   * module of skysh.export.js), whose zenithLuminance(ts, t) (cd/m^2, unchecked) the true sky takes.
+   */
+  function create(config, runtime) {
+    const zenithLuminance = runtime.zenithLuminance;
+    if (typeof zenithLuminance !== "function") {
+      throw new TypeError("SkyshSky.create needs the runtime's zenithLuminance(sunZenith, turbidity) (skysh.app.viewer hands it over)");
+    }
     const rgb = config.xyzToRgb;
     const rec = config.shRecurrence;
     const maxBands = config.maxBands;
@@ -44,12 +52,7 @@
       phi %= TWO_PI;
       const st = Math.sin(ts);
       const sun = [st * Math.cos(phi), st * Math.sin(phi), Math.cos(ts)];
-      const chi = (zl.chi0 + zl.chi1 * t) * (Math.PI - 2.0 * ts);
-      const zenith = [
-        chromaticity(config.zenithX, ts, t),
-        chromaticity(config.zenithY, ts, t),
-        (zl.a * t + zl.b) * Math.tan(chi) + zl.c * t + zl.d,
-      ];
+      const zenith = [chromaticity(config.zenithX, ts, t), chromaticity(config.zenithY, ts, t), zenithLuminance(ts, t)];
       const perezXyY = [perezAt(config.perez.x, t), perezAt(config.perez.y, t), perezAt(config.perez.Y, t)];
       const gammaZ = angle(0.0, 0.0, 1.0, sun); // the zenith on the path of every view, as skysh.model.preetham.xyY
       const cosGammaZ = Math.cos(gammaZ);

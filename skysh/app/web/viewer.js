@@ -302,7 +302,7 @@
   viewer.start = function start(rt) {
     runtime = rt;
     config = JSON.parse($("skysh-config").textContent);
-    sky = SkyshSky.create(config);
+    sky = SkyshSky.create(config, runtime);
     UP = new Float64Array(config.maxBands * config.maxBands);
     viewer.deringBands = [];
     for (let n = 1; n <= runtime.MAX_BANDS; n++) {
