@@ -14,8 +14,8 @@ The per-frame options, checked and resolved once
     parameter, checked (also :mod:`skysh.lighting.lights`' names).
 
 The generated C, GLSL, HLSL and JavaScript runtimes restate the same rules in their
-own languages (``skysh_use_table``, ``useTable``: :mod:`skysh.export.lights`,
-:mod:`skysh.export.js_parts`); ``tests/test_options.py`` checks :meth:`Options.resolve`
+own languages (``skysh_use_table`` in ``skysh/export/templates/c_like_kernel.h``, ``useTable``
+in ``js_module.mjs``); ``tests/test_options.py`` checks :meth:`Options.resolve`
 against an independent restatement of the table, ``tests/export/test_export_js.py`` and
 ``tests/export/test_export.py`` the exports against the runtime.
 

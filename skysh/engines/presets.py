@@ -462,21 +462,21 @@ def _without_noise(values: NDArray[np.float64], coeffs: NDArray[np.float64], eng
     return np.where((np.abs(values) < zero) & ~constant, 0.0, values) + 0.0
 
 
-def _frame_note(engine: str) -> str:
-    return {
-        "threejs": "three.js's right-handed Y-up frame: +X = skysh +X (sun azimuth 0), +Y = zenith, -Z = skysh +Y",
-        "filament": "Filament's right-handed Y-up frame: +X = skysh +X (sun azimuth 0), +Y = zenith, -Z = skysh +Y",
-        "unity": "Unity's left-handed Y-up frame: +X = skysh +X (sun azimuth 0), +Y = zenith, +Z = skysh +Y",
-        "babylon": "Babylon's left-handed Y-up frame: +X = skysh +X (sun azimuth 0), +Y = zenith, +Z = skysh +Y",
-        "unreal": "Unreal's left-handed Z-up frame: +X = skysh +X (sun azimuth 0), +Y = skysh -Y, +Z = zenith",
-    }[engine.split("-")[0]]
+_FRAME_NOTES: dict[str, str] = {
+    "threejs": "three.js's right-handed Y-up frame: +X = skysh +X (sun azimuth 0), +Y = zenith, -Z = skysh +Y",
+    "filament": "Filament's right-handed Y-up frame: +X = skysh +X (sun azimuth 0), +Y = zenith, -Z = skysh +Y",
+    "unity": "Unity's left-handed Y-up frame: +X = skysh +X (sun azimuth 0), +Y = zenith, +Z = skysh +Y",
+    "babylon": "Babylon's left-handed Y-up frame: +X = skysh +X (sun azimuth 0), +Y = zenith, +Z = skysh +Y",
+    "unreal": "Unreal's left-handed Z-up frame: +X = skysh +X (sun azimuth 0), +Y = skysh -Y, +Z = zenith",
+}
+"""Each engine's frame in skysh's words, for the snippets' comments (variants such as ``unity-shader`` share it)."""
 
 
 def _snippet_threejs(v: NDArray, bands: int) -> str:
     rows = ",\n".join("  " + ", ".join(double_literal(x) for x in row) for row in v)
     return (
         f"// skysh sky lighting ({bands} bands) for three.js: SphericalHarmonics3 / LightProbe.\n"
-        f"// Radiance SH (cd/m^2) without the Condon-Shortley phase, in {_frame_note('threejs')}.\n"
+        f"// Radiance SH (cd/m^2) without the Condon-Shortley phase, in {_FRAME_NOTES['threejs']}.\n"
         "// three's shader turns it into irradiance E (lux) and multiplies by albedo / pi.\n"
         "import { LightProbe, SphericalHarmonics3 } from 'three';\n\n"
         f"const skySH = new SphericalHarmonics3().fromArray([\n{rows}\n]);\n"
@@ -488,7 +488,7 @@ def _snippet_babylon(v: NDArray, bands: int) -> str:
     rows = ",\n".join(f"  [{', '.join(double_literal(x) for x in row)}] /* {name} */" for name, row in zip(_BABYLON_ROWS, v))
     return (
         f"// skysh sky lighting ({bands} bands) for Babylon.js: SphericalHarmonics -> SphericalPolynomial.\n"
-        f"// Harmonics of E/pi (A_l / pi times the radiance SH, cd/m^2), in {_frame_note('babylon')}.\n"
+        f"// Harmonics of E/pi (A_l / pi times the radiance SH, cd/m^2), in {_FRAME_NOTES['babylon']}.\n"
         "// Keep the default PBR path (brdf.useSphericalHarmonics = true): it evaluates these harmonics.\n"
         "import { SphericalHarmonics, SphericalPolynomial } from '@babylonjs/core';\n\n"
         f"const skyHarmonics = SphericalHarmonics.FromArray([\n{rows}\n]);\n"
@@ -507,7 +507,7 @@ def _snippet_filament(v: NDArray, bands: int, irradiance: bool) -> str:
     call = "irradiance" if irradiance else "radiance"
     return (
         f"// skysh sky lighting ({bands} bands) for Filament: IndirectLight::Builder::{call}.\n"
-        f"// {what},\n// in {_frame_note('filament')}.\n"
+        f"// {what},\n// in {_FRAME_NOTES['filament']}.\n"
         "#include <filament/IndirectLight.h>\n#include <math/vec3.h>\n\n"
         f"static const filament::math::float3 {name}[{v.shape[0]}] = {{\n{rows}\n}};\n\n"
         "// engine: your filament::Engine*. The numbers are absolute (cd/m^2): intensity 1, not the default 30000.\n"
@@ -521,7 +521,7 @@ def _snippet_unity(v: NDArray, bands: int) -> str:
     return (
         f"// skysh sky lighting ({bands} bands) for Unity: RenderSettings.ambientProbe (SphericalHarmonicsL2).\n"
         "// \"Unity format\": E/pi pre-multiplied by the basis constants (k_i A_l / pi, cd/m^2), sh[rgb, i],\n"
-        f"// in {_frame_note('unity')}.\n"
+        f"// in {_FRAME_NOTES['unity']}.\n"
         "var skyProbe = new UnityEngine.Rendering.SphericalHarmonicsL2();\n"
         + "\n".join(lines)
         + "\nUnityEngine.RenderSettings.ambientProbe = skyProbe;\n"
@@ -535,7 +535,7 @@ def _snippet_unity_shader(v: NDArray, bands: int) -> str:
     ]
     return (
         f"// skysh sky lighting ({bands} bands) for Unity shaders: unity_SHAr..unity_SHC, which ShadeSH9 evaluates\n"
-        f"// to E/pi (cd/m^2), in {_frame_note('unity')}.\n"
+        f"// to E/pi (cd/m^2), in {_FRAME_NOTES['unity']}.\n"
         "var skyBlock = new MaterialPropertyBlock();\n"
         + "\n".join(lines)
         + "\n// renderer: your Renderer. CustomProvided makes it use these instead of the light probes.\n"
@@ -548,7 +548,7 @@ def _snippet_unreal(v: NDArray, bands: int) -> str:
     lines = [f"SkySH.{ch}.V[{i}] = {suffixed_literal(v[c, i])};" for c, ch in enumerate("RGB") for i in range(9)]
     return (
         f"// skysh sky lighting ({bands} bands) for Unreal Engine: FSHVectorRGB3 of the sky light.\n"
-        f"// Radiance SH (cd/m^2) with the Condon-Shortley phase, in {_frame_note('unreal')}.\n"
+        f"// Radiance SH (cd/m^2) with the Condon-Shortley phase, in {_FRAME_NOTES['unreal']}.\n"
         "// Unreal convolves it (GetSkySHDiffuse returns max(E/pi, 0)) and scales it by the light's color.\n"
         "FSHVectorRGB3 SkySH;\n"
         + "\n".join(lines)

@@ -15,10 +15,12 @@ function, like the C arrays the Habel seed published, ready to paste.
 
 C, GLSL and HLSL are one kernel, ``skysh/export/templates/c_like_kernel.h`` (with its
 deringing, ``c_like_dering3.h``), written once over a few words each language defines
-(``c_like_words_c.h``, ``c_like_words_glsl.glsl``, ``c_like_words_hlsl.hlsl``: types, qualifiers,
-math functions, as sphericart writes one kernel for CPU and CUDA); the public functions
-(``skysh_coefficients``, ``skysh_sun_light``, ``skysh_engine_coefficients``) are thin calls of its
-steps spelled in each language (``c_like_api_c.h``, ``c_like_api_glsl.glsl``, ``c_like_api_hlsl.hlsl``),
+(:data:`skysh.export.dering.WORDS`: ``c_like_words_c.h``, ``c_like_words_glsl.glsl`` or
+``c_like_words_hlsl.hlsl`` then the shaders' shared ``c_like_words_shader.glsl``, and the math names
+of ``c_like_words_math.h``: types, qualifiers, math functions, as sphericart writes one kernel for CPU
+and CUDA); the public functions (``skysh_coefficients``, ``skysh_sun_light``,
+``skysh_engine_coefficients``) are thin calls of its steps spelled in C (``c_like_api_c.h``) and in
+the shaders (``c_like_api_shader.glsl``, its one hole GLSL's ``vec3`` or HLSL's ``float3``: :data:`API`),
 their signatures those of the earlier exports. This module writes numbers
 only (Filament's cmgen habit): the data section ``c_like_data.h`` (``#define`` lines and tables),
 an engine's index-and-factor table ``c_like_engine.h``, the deringing's numbers
@@ -49,7 +51,7 @@ from :mod:`skysh.model.preetham`, never retyped):
     (``SKYSH_TABLE[3 (r SKYSH_TERMS + i (SKYSH_DY + 1) + j) + c]``), so that each r is a
     contiguous dot product. With the certified irradiance
     table (3 bands; ``irradiance_table``, by intent for diffuse light, as the
-    runtime: :func:`skysh.export.lights.irradiance_parts`) the rows come from
+    runtime: ``skysh_use_table`` in ``c_like_kernel.h``) the rows come from
     ``IRRADIANCE`` instead (its radiance-equivalent E_lm / A_l), the ground's c_10
     from ``TABLE``; steps 4 and 6 are then skipped.
 4.  Gibbs filter (Habel eq. 5), when asked: zonal rows times ``sinc(pi l / N)``;
@@ -105,7 +107,7 @@ from skysh._version import __version__
 from skysh.checks import check_choice, interval_text
 from skysh.export import js as export_js
 from skysh.export import template
-from skysh.export.dering import WORDS, dering_defines
+from skysh.export.dering import dering_defines, words
 from skysh.export.lights import BY_INTENT, light_flags
 from skysh.export.tables import EnginePlan, ExportTables, engine_plan, export_tables
 from skysh.literals import float32_literal, number_rows, real_literal
@@ -124,8 +126,11 @@ DEFAULT_FILE_NAMES: dict[str, str] = {
 }
 """The file name each export is meant to be saved as (the C export is a header)."""
 
-API: dict[str, str] = {"c": "c_like_api_c.h", "glsl": "c_like_api_glsl.glsl", "hlsl": "c_like_api_hlsl.hlsl"}
-"""The template of each language's public functions, after the kernel."""
+API: dict[str, tuple[str, dict[str, str]]] = {
+    "c": ("c_like_api_c.h", {}), "glsl": ("c_like_api_shader.glsl", {"VEC3": "vec3"}),
+    "hlsl": ("c_like_api_shader.glsl", {"VEC3": "float3"}),
+}
+"""The template of each language's public functions, after the kernel, and its holes' values."""
 
 Literal = Callable[[float], str]
 """A number writer of :mod:`skysh.literals` (the export's precision)."""
@@ -142,7 +147,7 @@ def _defines(tables: ExportTables, literal: Literal) -> str:
     sizes = {"BANDS": tables.bands, "COUNT": tables.bands**2, "HALF": len(tables.half_layout),
              "ROWS": len(tables.half_layout) + (tables.bands == 1), "DX": tables.degrees[0], "DY": tables.degrees[1],
              "SUN_DX": lights.sun_degrees[0], "SUN_DY": lights.sun_degrees[1], "DERING": int(tables.bands == 3),
-             "LIGHTS": light_flags(lights), "IRRADIANCE_TABLE": int(_irradiance(tables) is not None),
+             "LIGHTS": light_flags(lights), "IRRADIANCE_TABLE": int(tables.bands == 3 and tables.irradiance is not None),
              "BY_INTENT": f"({BY_INTENT})"}
     (zmin, zmax), (tmin, tmax) = tables.sun_zenith_domain, tables.turbidity_domain
     numbers = {"ZMIN": zmin, "ZMAX": zmax, "TMIN": tmin, "TMAX": tmax, "X_SCALE": tables.x_scale,
@@ -156,11 +161,6 @@ def _defines(tables: ExportTables, literal: Literal) -> str:
                             | {f"SKYSH_{name}": literal(value) for name, value in numbers.items()})
 
 
-def _irradiance(tables: ExportTables) -> np.ndarray | None:
-    """The certified irradiance table's rows (DX + 1, DY + 1, 6, 3) of a 3-band export, else None."""
-    return tables.irradiance if tables.bands == 3 else None
-
-
 def _r_major(table: np.ndarray) -> np.ndarray:
     """(DX + 1, DY + 1, rows, 3) as (rows, terms, 3): the layout of SKYSH_TABLE."""
     return table.reshape(-1, table.shape[2], 3).transpose(1, 0, 2)
@@ -168,7 +168,8 @@ def _r_major(table: np.ndarray) -> np.ndarray:
 
 def _data(tables: ExportTables, literal: Literal) -> str:
     """The data section (``c_like_data.h``) filled with the export's numbers."""
-    rows, lights, irradiance = _r_major(tables.table), tables.lights, _irradiance(tables)
+    rows, lights = _r_major(tables.table), tables.lights
+    irradiance = tables.irradiance if tables.bands == 3 else None  # the certified table: 3 bands only
     if tables.bands == 1:  # the unfiltered c_10 (the ground's E_h) as row 1; with 2+ bands it is stored row 1
         rows = np.concatenate([rows, lights.c10.reshape(1, -1, 3)])
     return template.fill(
@@ -183,14 +184,11 @@ def _data(tables: ExportTables, literal: Literal) -> str:
 def _engine(plan: EnginePlan, literal: Literal) -> str:
     """An engine's tables (``c_like_engine.h``): the (output, input, factor) terms of its map and its offsets."""
     outputs, inputs = np.nonzero(plan.matrix)  # row-major: each output's terms in column order
-
-    def indices(values: np.ndarray) -> str:
-        return number_rows([str(int(v)) for v in values], "    ", 16)
-
+    index: Literal = lambda v: str(int(v))  # noqa: E731 (an index writes as a C int)
     return template.fill(
         "c_like_engine.h", NAME=plan.engine, SHAPE=str(plan.shape), COUNT=str(plan.offset.size),
-        TERMS=str(outputs.size), BAND=_numbers(plan.band_factor, literal), OUTPUT=indices(outputs),
-        INPUT=indices(inputs), FACTOR=_numbers(plan.matrix[outputs, inputs], literal),
+        TERMS=str(outputs.size), BAND=_numbers(plan.band_factor, literal), OUTPUT=_numbers(outputs, index, 16),
+        INPUT=_numbers(inputs, index, 16), FACTOR=_numbers(plan.matrix[outputs, inputs], literal),
         OFFSET=_numbers(plan.offset, literal),
     )
 
@@ -207,16 +205,22 @@ def _notice(tables: ExportTables, language: str, precision: str, options: str, p
     )
 
 
+def api_source(language: str) -> str:
+    """The public functions of ``language`` (``"c"``, ``"glsl"``, ``"hlsl"``): its :data:`API` template filled."""
+    name, values = API[language]
+    return template.fill(name, **values)
+
+
 def _c_like_source(tables: ExportTables, language: str, real: str, plan: EnginePlan | None) -> str:
     """The C header, or the GLSL or HLSL functions: the words, the numbers, the kernel."""
     c = language == "c"
     literal: Literal = (lambda v: real_literal(v, real)) if c else float32_literal
-    parts = [template.text(WORDS[language]), _data(tables, literal)]
+    parts = [words(language), _data(tables, literal)]
     if plan is not None:
         parts.append(_engine(plan, literal))
     if tables.bands == 3:  # the runtime's deringing (3 bands), in double in C, float in the shaders
         parts += [dering_defines("irradiance", "double" if c else "float"), template.text("c_like_dering3.h")]
-    body = "\n".join([*parts, template.text("c_like_kernel.h"), template.text(API[language])])
+    body = "\n".join([*parts, template.text("c_like_kernel.h"), api_source(language)])
     if not c:
         return template.fill("c_like_frame_shader.glsl", NOTICE=_notice(tables, language, "float32", "", plan), BODY=body)
     notice = _notice(tables, "c", f"{real} (C {real})", "" if real == "double" else " --c-real float", plan)

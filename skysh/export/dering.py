@@ -4,7 +4,7 @@ Deringing of 3-band SH in C, GLSL and HLSL
 
 The function that windows 3-band radiance SH in place as :func:`skysh.post.dering.dering`
 does is written once, by hand, in ``skysh/export/templates/c_like_dering3.h`` over the words
-of the C-like kernel (:data:`WORDS`); this module writes the numbers it reads:
+of the C-like kernel (:data:`WORDS`, :func:`words`); this module writes the numbers it reads:
 
 -   :func:`dering_defines`: its ``#define`` lines, the same table, kernel, basis constants,
     Newton steps and guards as Python's (:data:`GUARDS` per precision).
@@ -15,7 +15,7 @@ of the C-like kernel (:data:`WORDS`); this module writes the numbers it reads:
     -   GLSL, HLSL: ``int name(inout float c[27], out float scales_out[3])``, c[3 k + ch].
 
     ``name`` is the macro ``SKYSH_DERING_NAME``, which the function's definition expands.
--   :data:`LANGUAGES`, :data:`WORDS`.
+-   :data:`LANGUAGES`, :data:`WORDS`, :func:`words`.
 
 Each returns 1 when no row is non-negative (the last row is then applied), else 0. C (double)
 picks Python's row; GLSL and HLSL (float, with float guards and a 256-ulp allowance) may pick a
@@ -38,14 +38,25 @@ __all__ = ["dering_source"]
 LANGUAGES: tuple[str, ...] = ("c", "glsl", "hlsl")
 """Languages of :func:`dering_source`."""
 
-WORDS: dict[str, str] = {"c": "c_like_words_c.h", "glsl": "c_like_words_glsl.glsl", "hlsl": "c_like_words_hlsl.hlsl"}
-"""The template defining the C-like kernel's words (types, qualifiers, functions) in each language."""
+WORDS: dict[str, tuple[str, ...]] = {
+    "c": ("c_like_words_c.h", "c_like_words_math.h"),
+    "glsl": ("c_like_words_glsl.glsl", "c_like_words_shader.glsl", "c_like_words_math.h"),
+    "hlsl": ("c_like_words_hlsl.hlsl", "c_like_words_shader.glsl", "c_like_words_math.h"),
+}
+"""The templates defining the C-like kernel's words (types, qualifiers, functions) in each language, in order:
+the language's own, those GLSL and HLSL share, then the math names C's double build and the shaders share (a
+language naming them otherwise defines them first)."""
 
 GUARDS: dict[str, tuple[float, float, float, float]] = {
     "double": (shmin.TINY, shmin.FLOOR, shmin.POLE, shmin.ALLOWANCE),
     "float": (1e-30, 1e-18, 1e-12, shmin.ALLOWANCE / 2.0**-52 * 2.0**-23)}
 """(tiny, floor, pole, allowance) per precision: Python's in double; in float the same roles
 within float's range (floor^2 and a / pole^3 normal and finite for |f| <= pi)."""
+
+
+def words(language: str) -> str:
+    """The C-like kernel's words in ``language`` (:data:`WORDS`): its templates as shipped, one after another."""
+    return "\n".join(template.text(name) for name in WORDS[language])
 
 
 def dering_defines(target: str = "irradiance", precision: str = "double", name: str = "skysh_dering3") -> str:
@@ -93,4 +104,4 @@ def dering_source(language: str, target: str = "irradiance", name: str = "skysh_
     """
     check_choice(language, "language", LANGUAGES)
     defines = dering_defines(target, "double" if language == "c" else "float", name)
-    return "\n".join((template.text(WORDS[language]), defines, template.text("c_like_dering3.h")))
+    return "\n".join((words(language), defines, template.text("c_like_dering3.h")))

@@ -2,13 +2,15 @@
 The C, GLSL and HLSL exports' source files as they stand (skysh/export/templates/c_like_*)
 ==========================================================================================
 
-The exports are one C-like kernel (``c_like_kernel.h`` and its deringing ``c_like_dering3.h``) over the
-words of each language (``c_like_words_c.h``, ``c_like_words_glsl.glsl``, ``c_like_words_hlsl.hlsl``),
-the public functions in each language's own spelling (``c_like_api_c.h``, ``c_like_api_glsl.glsl``,
-``c_like_api_hlsl.hlsl``) and a data section that :mod:`skysh.export.c_like` fills with numbers. Here the
-shipped files are checked as they are, against ``tests/export/data/c_like_small.h``, a small data section
-written by hand in the data section's layout (four Chebyshev terms, short made-up tables, the real
-constants of the domain, the models and the deringing, and a four-value engine):
+The exports are one C-like kernel (``c_like_kernel.h`` and its deringing ``c_like_dering3.h``) over the words
+of each language (``c_like_words_c.h``, ``c_like_words_glsl.glsl``, ``c_like_words_hlsl.hlsl``, the shaders'
+shared ``c_like_words_shader.glsl`` and the math names ``c_like_words_math.h``:
+:data:`skysh.export.dering.WORDS`), the public functions in C's and in the shaders' spelling
+(``c_like_api_c.h``, ``c_like_api_shader.glsl`` with GLSL's or HLSL's RGB type:
+:data:`skysh.export.c_like.API`) and a data section that :mod:`skysh.export.c_like` fills with numbers. Here
+the shipped files are checked as they are, against ``tests/export/data/c_like_small.h``, a small data section
+written by hand in the data section's layout (four Chebyshev terms, short made-up tables, the real constants
+of the domain, the models and the deringing, and a four-value engine):
 
 -   C: the files compiled as C99 in double and in float (``SKYSH_FLOAT``) and as C++11, every warning an
     error, inside the export tests' harness (:data:`test_export_lights.C_HARNESS`); the double build's
@@ -52,11 +54,13 @@ CXX: str | None = shutil.which("c++") or shutil.which("g++") or shutil.which("cl
 """The machine's C++ compiler, or None (the C++ build then skips)."""
 
 KERNEL_FILES: tuple[str, ...] = ("c_like_words_c.h", "c_like_dering3.h", "c_like_kernel.h", "c_like_api_c.h")
-"""The C build's templates, in the order ``c_like_small_kernel.h`` includes them (around the data)."""
+"""The C build's templates, in the order ``c_like_small_kernel.h`` includes them (around the data); its
+``c_like_words_c.h`` stands for all the C words (:data:`skysh.export.dering.WORDS`, one after another)."""
 
 HOLES: dict[str, frozenset[str]] = {name: frozenset(holes) for name, holes in {
-    "c_like_words_c.h": (), "c_like_words_glsl.glsl": (), "c_like_words_hlsl.hlsl": (), "c_like_dering3.h": (),
-    "c_like_kernel.h": (), "c_like_api_c.h": (), "c_like_api_glsl.glsl": (), "c_like_api_hlsl.hlsl": (),
+    "c_like_words_c.h": (), "c_like_words_glsl.glsl": (), "c_like_words_hlsl.hlsl": (), "c_like_words_shader.glsl": (),
+    "c_like_words_math.h": (), "c_like_dering3.h": (), "c_like_kernel.h": (), "c_like_api_c.h": (),
+    "c_like_api_shader.glsl": ("VEC3",),
     "c_like_data.h": ("DEFINES", "TABLE", "GIBBS", "LOBE", "PEREZ", "IRRADIANCE", "SUN_TABLE", "SUN_RGB", "SUN_TRIG",
                       "GROUND"),
     "c_like_engine.h": ("NAME", "SHAPE", "COUNT", "TERMS", "BAND", "OUTPUT", "INPUT", "FACTOR", "OFFSET"),
@@ -65,7 +69,8 @@ HOLES: dict[str, frozenset[str]] = {name: frozenset(holes) for name, holes in {
     "c_like_notice_engine.txt": ("ENGINE", "COUNT", "SHAPE"),
     "c_like_frame_c.h": ("NOTICE", "FLOAT", "BODY"), "c_like_frame_shader.glsl": ("NOTICE", "BODY"),
 }.items()}
-"""Every C-like template and its holes: the code files have none, the data files numbers and switches only."""
+"""Every C-like template and its holes: the code files have none but the shaders' RGB type, the data files numbers
+and switches only."""
 
 TOLERANCE: float = 1e-12
 """The double build against numpy on the same numbers, over the largest |value| of the case: a few roundings of
@@ -87,8 +92,8 @@ Line = tuple  # (engine, ts, t, phi, gibbs, dering, irradiance, sun, null_albedo
 
 
 def small_files() -> dict[str, str]:
-    """The files of the C build, each as it stands: the templates, the small data, the harness."""
-    files = {name: template.text(name) for name in KERNEL_FILES}
+    """The files of the C build, each as it stands: the templates (the C words joined), the small data, the harness."""
+    files = {name: template.text(name) for name in KERNEL_FILES} | {"c_like_words_c.h": export_dering.words("c")}
     files.update({p.name: p.read_text(encoding="utf-8") for p in (DATA / "c_like_small.h", DATA / "c_like_small_kernel.h")})
     return files | {"harness.c": C_HARNESS}
 
@@ -259,9 +264,9 @@ def small_shader(version: str) -> tuple[str, str]:
     """(language, shader): the words of ``version``'s language, the small data, the deringing, the kernel and the
     language's public functions, each file as it stands, and a main calling every one of them."""
     language = "hlsl" if version == "hlsl" else "glsl"
-    words = template.text("c_like_words_hlsl.hlsl" if language == "hlsl" else "c_like_words_glsl.glsl")
-    body = "\n".join([words, (DATA / "c_like_small.h").read_text(encoding="utf-8"), template.text("c_like_dering3.h"),
-                      template.text("c_like_kernel.h"), template.text(c_like.API[language]), SHADER_MAIN[language]])
+    body = "\n".join([export_dering.words(language), (DATA / "c_like_small.h").read_text(encoding="utf-8"),
+                      template.text("c_like_dering3.h"), template.text("c_like_kernel.h"), c_like.api_source(language),
+                      SHADER_MAIN[language]])
     if language == "hlsl":
         return language, body
     return language, f"#version {version}\n" + ("precision highp float;\n" if version.endswith("es") else "") + body
@@ -336,20 +341,24 @@ def test_every_c_like_template_is_listed_with_its_holes() -> None:
 
 
 def test_the_code_files_are_the_same_for_every_language(exported: Exported) -> None:
-    """Each export holds the kernel (and, with 3 bands, the deringing) verbatim, and its own words and functions."""
-    for language, words in export_dering.WORDS.items():
+    """Each export holds the kernel (and, with 3 bands, the deringing) verbatim, and its own words and functions
+    (those the shaders share included), not another language's."""
+    for language in export_dering.LANGUAGES:
         source = exported(language, bands=3)
         assert template.text("c_like_kernel.h") in source and template.text("c_like_dering3.h") in source
-        assert template.text(words) in source and template.text(c_like.API[language]) in source
-        others = [*export_dering.WORDS.values(), *c_like.API.values()]
-        assert all(template.text(other) not in source for other in others if other not in (words, c_like.API[language]))
+        assert export_dering.words(language) in source and c_like.api_source(language) in source
+        others = [other for other in export_dering.LANGUAGES if other != language]
+        assert all(c_like.api_source(other) not in source for other in others)
+        own = set(export_dering.WORDS[language])
+        assert all(template.text(name) not in source for other in others for name in export_dering.WORDS[other]
+                   if name not in own)
     assert template.text("c_like_dering3.h") not in exported("c", bands=2)
 
 
 def test_dering_source_is_the_kernel_s() -> None:
-    for language, words in export_dering.WORDS.items():
+    for language in export_dering.LANGUAGES:
         source = export_dering.dering_source(language, name="sky")
-        assert source.startswith(template.text(words)) and source.endswith(template.text("c_like_dering3.h"))
+        assert source.startswith(export_dering.words(language)) and source.endswith(template.text("c_like_dering3.h"))
 
 
 class TestTemplateModule:

@@ -1,8 +1,8 @@
 /*
  * The sky's SH coefficients in C, GLSL and HLSL: one kernel (skysh/export/templates/c_like_kernel.h)
- * over the words of c_like_words_c.h, c_like_words_glsl.glsl or c_like_words_hlsl.hlsl and the
- * numbers of the data section (c_like_data.h, c_like_engine.h), the steps of skysh.SkySH.coefficients
- * in its order (skysh.export.c_like lists them):
+ * over the words of c_like_words_c.h, c_like_words_glsl.glsl or c_like_words_hlsl.hlsl (then
+ * c_like_words_shader.glsl), c_like_words_math.h and the numbers of the data section (c_like_data.h,
+ * c_like_engine.h), the steps of skysh.SkySH.coefficients in its order (skysh.export.c_like lists them):
  *
  *  1. refuse a frame outside the domain (C: -1 .. -5, the shaders: false; the output zeroed);
  *  2. x and y of the sun zenith and the log turbidity, their Chebyshev polynomials;
@@ -19,7 +19,7 @@
  * shaders everything is float32; the flags are bool and a function returns true where C returns 0.
  * The public functions, skysh_coefficients, skysh_sun_light and (with an engine)
  * skysh_engine_coefficients, call these in each language's own words: c_like_api_c.h,
- * c_like_api_glsl.glsl, c_like_api_hlsl.hlsl.
+ * c_like_api_shader.glsl.
  */
 
 /* Y_z / F_Y(0, ts): the sky's luminance scale, cd/m^2 (Preetham 1999, appendix). */
@@ -274,7 +274,7 @@ SKYSH_FN SKYSH_STATUS skysh_evaluate(SKYSH_REAL sun_zenith, SKYSH_REAL turbidity
 }
 
 /*
- * skysh_sun_light's steps (the public function: c_like_api_c.h, c_like_api_glsl.glsl, c_like_api_hlsl.hlsl):
+ * skysh_sun_light's steps (the public function: c_like_api_c.h, c_like_api_shader.glsl):
  * the unit vector towards the sun (Z up) and its RGB direct normal illuminance, lux, unclamped.
  */
 SKYSH_FN SKYSH_STATUS skysh_evaluate_sun_light(SKYSH_REAL sun_zenith, SKYSH_REAL turbidity, SKYSH_REAL sun_azimuth,

@@ -1,12 +1,13 @@
 /*
  * The words of the C-like kernel in C (skysh/export/templates/c_like_words_c.h): the kernel
  * (c_like_kernel.h) and its deringing (c_like_dering3.h) are written once over these names, which
- * c_like_words_glsl.glsl and c_like_words_hlsl.hlsl define for the shaders (sphericart's habit: one
- * kernel, the language in macros). Needs <math.h>; SKYSH_FLOAT 1 selects float for skysh_real.
+ * c_like_words_glsl.glsl or c_like_words_hlsl.hlsl and c_like_words_shader.glsl define for the shaders
+ * (sphericart's habit: one kernel, the language in macros), and c_like_words_math.h after these (sin ..
+ * pow). Needs <math.h>; SKYSH_FLOAT 1 selects float for skysh_real.
  */
 #if SKYSH_FLOAT
 typedef float skysh_real;
-#define SKYSH_SIN sinf
+#define SKYSH_SIN sinf /* float's names, before c_like_words_math.h's double ones */
 #define SKYSH_COS cosf
 #define SKYSH_TAN tanf
 #define SKYSH_EXP expf
@@ -15,12 +16,6 @@ typedef float skysh_real;
 #define SKYSH_FMOD fmodf
 #else
 typedef double skysh_real;
-#define SKYSH_SIN sin
-#define SKYSH_COS cos
-#define SKYSH_TAN tan
-#define SKYSH_EXP exp
-#define SKYSH_LOG log
-#define SKYSH_POW pow
 #define SKYSH_FMOD fmod
 #endif
 #define SKYSH_SHADER 0 /* 1 in GLSL and HLSL */

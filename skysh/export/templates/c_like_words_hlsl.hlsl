@@ -1,36 +1,10 @@
 /*
- * The words of the C-like kernel in HLSL (skysh/export/templates/c_like_words_hlsl.hlsl; HLSL
- * shader model 4 or later): the names c_like_words_c.h defines for C, here float32 throughout.
+ * The words of the C-like kernel that are HLSL's own (skysh/export/templates/c_like_words_hlsl.hlsl;
+ * HLSL shader model 4 or later), before those it shares with GLSL (c_like_words_shader.glsl).
  */
-#define SKYSH_SHADER 1
-#define SKYSH_REAL float
-#define SKYSH_BOOL bool
-#define SKYSH_STATUS bool
-#define SKYSH_OK true
-#define SKYSH_FAIL(code) false
-#define SKYSH_FN
-#define SKYSH_IN in
-#define SKYSH_OUT out
-#define SKYSH_INOUT inout
 #define SKYSH_RGB(name) float3 name
 #define SKYSH_ALBEDO float3
-#define SKYSH_ALBEDO_AT(albedo, c) (albedo)[c]
-#define SKYSH_TO_REAL(x) float(x)
 #define SKYSH_CONST static const
 #define SKYSH_ARRAY(type, size) {
 #define SKYSH_END }
-#define SKYSH_SIN sin
-#define SKYSH_COS cos
-#define SKYSH_TAN tan
-#define SKYSH_EXP exp
-#define SKYSH_LOG log
-#define SKYSH_POW pow
 #define SKYSH_FMOD fmod
-#define SKYSH_DREAL float
-#define SKYSH_DERING_COEFFS(name) float name[27]
-#define SKYSH_DC(coeffs, k, ch) coeffs[(k) * 3 + (ch)]
-#define SKYSH_SQRT sqrt
-#define SKYSH_ABS abs
-#define SKYSH_MAX max
-#define SKYSH_MIN min
-#define SKYSH_CBRT(x) pow(x, 1.0 / 3.0)
