@@ -47,20 +47,7 @@ from functools import cache, lru_cache
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from skysh.checks import (
-    MAX_ARRAY_ELEMENTS,
-    as_float_array,
-    check_bands,
-    check_choice,
-    check_count,
-    check_dirs,
-    check_flag,
-    check_scalar,
-    check_seed,
-    check_size,
-    read_only,
-    short_repr,
-)
+from skysh import checks
 
 __all__ = ["Y00", "K_LINEAR", "K_PRODUCT", "K_ZONAL", "K_SECTORAL", "BASIS_CONSTANTS", "MAX_BANDS",
     "MAX_GAUSS_NODES", "PROJECTION_METHODS", "index", "lm", "band_of_index", "basis", "basis_unchecked",
@@ -112,19 +99,19 @@ DEFAULT_SAMPLES: int = 1 << 16
 # --------------------------------------------------------------------------- #
 def n_coeffs(bands: int) -> int:
     """Number of coefficients of ``bands`` bands: ``bands ** 2``."""
-    return check_bands(bands, high=MAX_BANDS) ** 2
+    return checks.check_bands(bands, high=MAX_BANDS) ** 2
 
 
 def index(l: int, m: int) -> int:
     """Flat index ``l (l + 1) + m`` of the coefficient (l, m): integers, ``0 <= l < MAX_BANDS``, ``|m| <= l``."""
-    l = check_count(l, "l", 0, MAX_BANDS - 1)
-    m = check_count(m, "m", -l, l)
+    l = checks.check_count(l, "l", 0, MAX_BANDS - 1)
+    m = checks.check_count(m, "m", -l, l)
     return l * (l + 1) + m
 
 
 def lm(i: int) -> tuple[int, int]:
     """Inverse of :func:`index`: the (l, m) of the flat index ``i``, an integer in [0, MAX_BANDS**2 - 1]."""
-    i = check_count(i, "i", 0, MAX_BANDS * MAX_BANDS - 1)
+    i = checks.check_count(i, "i", 0, MAX_BANDS * MAX_BANDS - 1)
     l = math.isqrt(i)
     return l, i - l * (l + 1)
 
@@ -133,7 +120,7 @@ def lm(i: int) -> tuple[int, int]:
 def band_of_index(bands: int) -> NDArray[np.int64]:
     """Band l of every flat index i < ``bands``**2 (docs/conventions.md order), read-only, cached."""
     out = np.repeat(np.arange(bands), 2 * np.arange(bands) + 1)
-    read_only(out)
+    checks.read_only(out)
     return out
 
 
@@ -162,7 +149,7 @@ class BasisRecurrence:
 
 def basis_recurrence(bands: int) -> BasisRecurrence:
     """The recurrence's constants for ``bands`` in [1, 64] (cached, read-only): for code that evaluates the basis elsewhere."""
-    return _recurrence(check_bands(bands, high=MAX_BANDS))
+    return _recurrence(checks.check_bands(bands, high=MAX_BANDS))
 
 
 @cache
@@ -178,7 +165,7 @@ def _recurrence(bands: int) -> BasisRecurrence:
         for m in range(0, l - 1):
             a[l, m] = math.sqrt((4 * l * l - 1) / (l * l - m * m))
             b[l, m] = math.sqrt(((l - 1) ** 2 - m * m) * (2 * l + 1) / ((2 * l - 3) * (l * l - m * m)))
-    read_only(diag, a, b)
+    checks.read_only(diag, a, b)
     return BasisRecurrence(bands, diag, a, b)
 
 
@@ -265,8 +252,8 @@ def basis(dirs: ArrayLike, bands: int) -> NDArray[np.float64]:
     >>> float(basis([0.0, 0.0, 1.0], 1)[0]) == 0.5 / math.sqrt(math.pi)
     True
     """
-    bands = check_bands(bands, high=MAX_BANDS)
-    return basis_unchecked(check_dirs(dirs, per_point=bands * bands), bands)
+    bands = checks.check_bands(bands, high=MAX_BANDS)
+    return basis_unchecked(checks.check_dirs(dirs, per_point=bands * bands), bands)
 
 
 def basis_unchecked(d: NDArray[np.float64], bands: int) -> NDArray[np.float64]:
@@ -313,11 +300,11 @@ def evaluate(coeffs: ArrayLike, dirs: ArrayLike) -> NDArray[np.float64]:
         Shape (...,) for coefficients (N * N,), else (..., C); same units as the
         coefficients.
     """
-    c = as_float_array(coeffs, "coeffs")
+    c = checks.as_float_array(coeffs, "coeffs")
     if c.ndim not in (1, 2) or (c.ndim == 2 and c.shape[1] == 0):
         raise ValueError(f"coeffs must have shape (N*N,) or (N*N, C) with C >= 1, got {c.shape}")
     bands = _coeff_bands(c)
-    d = check_dirs(dirs, per_point=max(bands * bands, c.size // c.shape[0]))
+    d = checks.check_dirs(dirs, per_point=max(bands * bands, c.size // c.shape[0]))
     return basis_unchecked(d, bands) @ c
 
 
@@ -329,13 +316,13 @@ def gauss_legendre(n: int) -> tuple[NDArray, NDArray]:
 
     ``n`` is an integer in [1, :data:`MAX_GAUSS_NODES`].
     """
-    return _gauss_legendre(check_count(n, "n", 1, MAX_GAUSS_NODES))
+    return _gauss_legendre(checks.check_count(n, "n", 1, MAX_GAUSS_NODES))
 
 
 @lru_cache(maxsize=256)
 def _gauss_legendre(n: int) -> tuple[NDArray, NDArray]:
     nodes, weights = np.polynomial.legendre.leggauss(n)
-    read_only(nodes, weights)
+    checks.read_only(nodes, weights)
     return nodes, weights
 
 
@@ -367,7 +354,8 @@ def quadrature_rule(n_theta: int, hemisphere: bool = False) -> tuple[NDArray, ND
         ``< 2 n_theta`` in phi, hence for products of two SH of bands
         ``<= n_theta``. Read-only arrays, cached.
     """
-    return _quadrature_rule(check_count(n_theta, "n_theta", 1, MAX_GAUSS_NODES), check_flag(hemisphere, "hemisphere"))
+    n_theta = checks.check_count(n_theta, "n_theta", 1, MAX_GAUSS_NODES)
+    return _quadrature_rule(n_theta, checks.check_flag(hemisphere, "hemisphere"))
 
 
 @lru_cache(maxsize=64)
@@ -379,7 +367,7 @@ def _quadrature_rule(n_theta: int, hemisphere: bool) -> tuple[NDArray, NDArray]:
     phi = (np.arange(n_phi) + 0.5) * (2.0 * np.pi / n_phi)
     dirs = _unit_vectors(z[:, None], phi).reshape(-1, 3)
     weights = np.repeat(wz * (2.0 * np.pi / n_phi), n_phi)
-    read_only(dirs, weights)
+    checks.read_only(dirs, weights)
     return dirs, weights
 
 
@@ -388,7 +376,7 @@ def _quadrature_basis(n_theta: int, hemisphere: bool, bands: int) -> tuple[NDArr
     """Nodes and the weighted basis (bands**2, M) of a cached quadrature rule."""
     dirs, weights = _quadrature_rule(n_theta, hemisphere)
     wy = _basis_kn(dirs[:, 0], dirs[:, 1], dirs[:, 2], bands) * weights
-    read_only(wy)
+    checks.read_only(wy)
     return dirs, wy
 
 
@@ -458,21 +446,21 @@ def project(
         value that is not a finite real number.
     """
     if not callable(f):
-        raise ValueError(f"f must be a callable taking unit vectors (M, 3), got {short_repr(f)}")
-    bands = check_bands(bands, high=MAX_BANDS)
-    check_choice(method, "method", PROJECTION_METHODS)
-    seed = check_seed(seed)
-    hemisphere = check_flag(hemisphere, "hemisphere")
+        raise ValueError(f"f must be a callable taking unit vectors (M, 3), got {checks.short_repr(f)}")
+    bands = checks.check_bands(bands, high=MAX_BANDS)
+    checks.check_choice(method, "method", PROJECTION_METHODS)
+    seed = checks.check_seed(seed)
+    hemisphere = checks.check_flag(hemisphere, "hemisphere")
     if n is not None:
-        n = check_count(n, "n", 1, 2 * MAX_GAUSS_NODES**2 if method == "quadrature" else MAX_ARRAY_ELEMENTS)
+        n = checks.check_count(n, "n", 1, 2 * MAX_GAUSS_NODES**2 if method == "quadrature" else checks.MAX_ARRAY_ELEMENTS)
     if method == "quadrature":
         n_theta = 2 * bands + 8 if n is None else max(bands, round(math.sqrt(n / 2)))
-        check_size(2 * n_theta * n_theta * bands * bands, "n" if n is not None else "bands", "the basis at the nodes")
+        checks.check_size(2 * n_theta * n_theta * bands * bands, "n" if n is not None else "bands", "the basis at the nodes")
         dirs, wy = _quadrature_basis(n_theta, hemisphere, bands)
         return wy @ _call(f, dirs)
     count = DEFAULT_SAMPLES if n is None else n
     points = 1 << max(0, math.ceil(math.log2(count))) if method == "qmc" else count
-    check_size(points * bands * bands, "n", "the basis at the samples")
+    checks.check_size(points * bands * bands, "n", "the basis at the samples")
     square = _sample_square(method, count, seed)
     dirs = _uniform_dirs(square[:, 0], square[:, 1], hemisphere)
     values = _call(f, dirs)
@@ -482,7 +470,7 @@ def project(
 
 
 def _call(f: Callable[[NDArray], ArrayLike], dirs: NDArray) -> NDArray:
-    values = as_float_array(f(dirs), "the values returned by f")
+    values = checks.as_float_array(f(dirs), "the values returned by f")
     if values.shape[:1] != dirs.shape[:1] or values.ndim > 2:
         raise ValueError(f"f must return shape (M,) or (M, C) for dirs (M, 3), got {values.shape}")
     return values
@@ -520,8 +508,8 @@ def rotate_z(coeffs: ArrayLike, angle: ArrayLike) -> NDArray[np.float64]:
             c'(l, m)  = c(l, m) cos(m a) - c(l, -m) sin(m a)
             c'(l, -m) = c(l, -m) cos(m a) + c(l, m) sin(m a)
     """
-    c = as_float_array(coeffs, "coeffs")
-    a = as_float_array(angle, "angle")
+    c = checks.as_float_array(coeffs, "coeffs")
+    a = checks.as_float_array(angle, "angle")
     vector = c.ndim == 1
     c = c[:, None] if vector else c
     if c.ndim < 2:
@@ -531,7 +519,7 @@ def rotate_z(coeffs: ArrayLike, angle: ArrayLike) -> NDArray[np.float64]:
         shape = np.broadcast_shapes(c.shape, a.shape + (1, 1))
     except ValueError:
         raise ValueError(f"angle must broadcast with the batch axes of coeffs: shapes {a.shape} and {c.shape[:-2]}") from None
-    check_size(math.prod(shape), "angle" if a.size > 1 else "coeffs", "rotated coefficients")
+    checks.check_size(math.prod(shape), "angle" if a.size > 1 else "coeffs", "rotated coefficients")
     pos, neg, ms = _z_pairs(bands)
     a = np.fmod(a, 2.0 * math.pi)  # m * angle stays small, so cos and sin keep their digits
     ma = a[..., None] * ms  # (..., P)
@@ -545,7 +533,7 @@ def rotate_z(coeffs: ArrayLike, angle: ArrayLike) -> NDArray[np.float64]:
 
 def rotation_z_matrix(angle: float) -> NDArray[np.float64]:
     """3x3 matrix of the rotation about +Z by ``angle`` radians (one finite number; +X towards +Y)."""
-    angle = math.fmod(check_scalar(angle, "angle", unit="rad"), 2.0 * math.pi)
+    angle = math.fmod(checks.check_scalar(angle, "angle", unit="rad"), 2.0 * math.pi)
     c, s = math.cos(angle), math.sin(angle)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
@@ -574,8 +562,8 @@ def rotate(coeffs: ArrayLike, R: ArrayLike) -> NDArray[np.float64]:
     band-limited integrand; this replaces the Ivanic-Ruedenberg recurrence with
     something that shares all of its code with :func:`basis`.
     """
-    c = as_float_array(coeffs, "coeffs")
-    r = as_float_array(R, "R")
+    c = checks.as_float_array(coeffs, "coeffs")
+    r = checks.as_float_array(R, "R")
     if r.shape != (3, 3):
         raise ValueError(f"R must have shape (3, 3), got {r.shape}")
     if not (np.allclose(r @ r.T, np.eye(3), atol=1e-9) and abs(np.linalg.det(r) - 1.0) < 1e-9):
@@ -605,8 +593,8 @@ def convolve(coeffs: ArrayLike, per_band: ArrayLike) -> NDArray[np.float64]:
     per_band
         At least N factors, shape (>= N,); the first N are used.
     """
-    c = as_float_array(coeffs, "coeffs")
-    k = as_float_array(per_band, "per_band")
+    c = checks.as_float_array(coeffs, "coeffs")
+    k = checks.as_float_array(per_band, "per_band")
     bands = _batched_bands(c)
     if k.ndim != 1 or k.shape[0] < bands:
         raise ValueError(f"per_band must have shape (>= {bands},), got {k.shape}")
@@ -621,7 +609,7 @@ def _cosine_lobe(bands: int) -> NDArray[np.float64]:
     a = np.array([2.0 * math.pi / 3.0 if l == 1 else 0.0 if l % 2 else
                   2.0 * math.pi * (-1.0) ** (l // 2 - 1) / ((l + 2) * (l - 1)) * math.comb(l, l // 2) / 2.0**l
                   for l in range(bands)], dtype=np.float64)
-    read_only(a)
+    checks.read_only(a)
     return a
 
 
@@ -633,7 +621,7 @@ def cosine_lobe(bands: int) -> NDArray[np.float64]:
     L(w) max(0, n.w) dw``: A_0 = pi, A_1 = 2 pi / 3, A_2 = pi / 4, odd l > 1 zero,
     even l by the closed form of Ramamoorthi and Hanrahan (2001).
     """
-    return _cosine_lobe(check_bands(bands, high=MAX_BANDS)).copy()
+    return _cosine_lobe(checks.check_bands(bands, high=MAX_BANDS)).copy()
 
 
 def irradiance(coeffs: ArrayLike) -> NDArray[np.float64]:
@@ -650,7 +638,7 @@ def irradiance(coeffs: ArrayLike) -> NDArray[np.float64]:
     ndarray
         Irradiance SH in L * sr (cd/m^2 * sr = lux for luminance), same shape.
     """
-    c = as_float_array(coeffs, "coeffs")
+    c = checks.as_float_array(coeffs, "coeffs")
     return convolve(c, _cosine_lobe(_batched_bands(c)))
 
 
@@ -661,7 +649,7 @@ Y_UP_MATRIX: NDArray[np.float64] = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [
 """Rotation taking this package's Z-up frame to a right-handed Y-up frame (glTF):
 +X stays +X, +Z (zenith) goes to +Y, +Y goes to -Z (a rotation of -90 degrees
 about X; det = +1, so handedness is kept)."""
-read_only(Y_UP_MATRIX)
+checks.read_only(Y_UP_MATRIX)
 
 
 def to_y_up(coeffs: ArrayLike) -> NDArray[np.float64]:

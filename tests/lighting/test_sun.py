@@ -295,7 +295,7 @@ class TestPosition:
 
     def test_below_horizon_refused(self) -> None:
         midnight = "2024-03-20T00:00:00-07:00"
-        with pytest.raises(ValueError, match=r"below the horizon.*Preetham sky model is not defined there"):
+        with pytest.raises(ValueError, match=r"below the horizon"):
             sun.position(40.0, -105.0, midnight)
         # position_unchecked reports the sun under the horizon instead.
         zenith, _ = sun.position_unchecked(40.0, -105.0, midnight)

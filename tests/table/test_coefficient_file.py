@@ -559,23 +559,23 @@ class TestWriteRefusals:
             write({"sun": cf.NamedTable(np.full((12, 1, 3), 9.0), np.array([[3, 2]]))})
         with pytest.raises(cf.CoefficientFileError, match="unknown table 'moon'"):
             write({"sun": _sun(), "moon": _sun()})
-        with pytest.raises(cf.CoefficientFileError, match=r"tables\['sun'\] must be a NamedTable, got tuple"):
+        with pytest.raises(cf.CoefficientFileError, match=r"tables\['sun'\] .*NamedTable.*tuple"):
             write({"sun": (_sun().table, _sun().degrees)})
-        with pytest.raises(cf.CoefficientFileError, match="tables must be a mapping of names to NamedTable, got list"):
+        with pytest.raises(cf.CoefficientFileError, match=r"^tables .*list"):
             write([_sun()])
         with pytest.raises(cf.CoefficientFileError, match=r"metadata tables describes \['moon', 'sun'\]; the tables held are "
                            r"\['irradiance', 'sun'\]"):
             write(good.tables, {"tables": {"sun": {"rgb_from_xyz": SRGB_FROM_XYZ}, "moon": {}}})
-        with pytest.raises(cf.CoefficientFileError, match="metadata tables must be a JSON object, got list"):
+        with pytest.raises(cf.CoefficientFileError, match=r"metadata tables .*list"):
             write(good.tables, {"tables": []})
         assert not (tmp_path / "x.npz").exists()
 
     def test_argument_types(self, tmp_path: Path) -> None:
-        with pytest.raises(cf.CoefficientFileError, match=r"sky_table must be a skysh.table.coefficient_file.SkyTable, got dict"):
+        with pytest.raises(cf.CoefficientFileError, match=r"^sky_table .*SkyTable.*dict"):
             cf.write(tmp_path / "x.npz", {"table": 1})  # type: ignore[arg-type]
         with pytest.raises(cf.CoefficientFileError, match=r"path must be a str or os.PathLike"):
             cf.write(7, _small_table())  # type: ignore[arg-type]
-        with pytest.raises(cf.CoefficientFileError, match="table must be a numpy array of floats, got list"):
+        with pytest.raises(cf.CoefficientFileError, match=r"^table .*list"):
             cf.write(tmp_path / "x.npz", cf.SkyTable(table=[[1.0]], degrees=np.zeros((1, 2), np.int64)))  # type: ignore[arg-type]
 
     def test_existing_file_replaced_whole(self, tmp_path: Path) -> None:

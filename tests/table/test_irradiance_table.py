@@ -268,7 +268,7 @@ class TestOptions:
         assert sky.has_irradiance_table and not bare.has_irradiance_table
         np.testing.assert_array_equal(bare.coefficients(*self.FRAME, irradiance=True),
                                       sky.coefficients(*self.FRAME, irradiance=True, irradiance_table=False))
-        with pytest.raises(ValueError, match="irradiance_table=True needs the coefficient file's irradiance table"):
+        with pytest.raises(ValueError, match=r"^irradiance_table"):
             bare.coefficients(*self.FRAME, irradiance=True, irradiance_table=True)
 
     @pytest.mark.parametrize("kwargs, match", [
