@@ -645,7 +645,7 @@ class TestIrradianceTableSection:
             assert f"| {name} |" in text
         assert {study.PLAIN, study.runtime_name(False), study.runtime_name(True)} <= set(data["results"])
         assert sum(name.startswith("tabulated: ") for name in data["results"]) == 1
-        assert len(data["results"]) == 9  # plain, 2 runtime, continuous, 4 optima, tabulated
+        assert len(data["results"]) == 10  # plain, 2 runtime, continuous, whole rows, 4 optima, tabulated
 
     @needs_cvxpy
     def test_the_tabulated_row_meets_the_bound_and_stays_non_negative(self, section_11: tuple[dict, object],

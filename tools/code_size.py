@@ -67,15 +67,18 @@ EXPORT_PACKAGE: str = f"{PACKAGE}.export"
 PACKAGE_BUDGETS: dict[str, int] = {
     "skysh": 15, "skysh.__main__": 5, "skysh._version": 1, "skysh.checks": 145, "skysh.domain": 110,
     "skysh.options": 90, "skysh.files": 65, "skysh.literals": 30,
-    "skysh.sh": 440, "skysh.post": 505, "skysh.model": 900, "skysh.table": 1210, "skysh.lighting": 440,
+    "skysh.sh": 440, "skysh.post": 650, "skysh.model": 900, "skysh.table": 1210, "skysh.lighting": 440,
     "skysh.runtime": 350, "skysh.engines": 395, "skysh.export": 700, "skysh.app": 1360,
 }
 """Code lines each package (a sub-package, or a module of the package's root) may hold (issue 24, item 5):
-a ceiling a change must argue with, counted in code lines so that prose is never squeezed to pay for code."""
+a ceiling a change must argue with, counted in code lines so that prose is never squeezed to pay for code.
+Issue 25 raised ``skysh.post`` from 505 to 650: the least window's search (the exact fraction by tangents and
+chords, the certificate's start and gallop, ``least_window``, ``window_at``) is 136 code lines."""
 
-BUDGETS: dict[str, int] = {"skysh code lines": 6500, "export code lines": 700, "skysh __all__ names": 250,
+BUDGETS: dict[str, int] = {"skysh code lines": 6700, "export code lines": 700, "skysh __all__ names": 250,
                            "import cycles": 0}
-"""Issue 24's targets, printed beside the measured numbers."""
+"""Issue 24's targets, printed beside the measured numbers (the total raised from 6,500 by issue 25's least
+window: 136 lines in ``skysh.post``, 33 in ``skysh.export``)."""
 
 NOT_CODE: frozenset[int] = frozenset({tokenize.COMMENT, tokenize.NL, tokenize.NEWLINE, tokenize.INDENT,
                                       tokenize.DEDENT, tokenize.ENDMARKER, tokenize.ENCODING})

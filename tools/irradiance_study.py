@@ -51,7 +51,7 @@ if str(ROOT) not in sys.path:
 import numpy as np  # noqa: E402
 from numpy.typing import NDArray  # noqa: E402
 
-from skysh.post.dering import LINEAR_ATTENUATION, SEED_WINDOW_SIZES, exact_min, sinc4_window  # noqa: E402
+from skysh.post.dering import LINEAR_ATTENUATION, SEED_WINDOW_SIZES, dering, exact_min, sinc4_window  # noqa: E402
 from skysh.sh import basis as sh  # noqa: E402
 from skysh.sh import minimum as shmin  # noqa: E402
 from skysh.table import fit  # noqa: E402
@@ -295,10 +295,10 @@ def continuous_window(size: NDArray) -> NDArray:
 def continuous_dering(sky: Any, skies: list[tuple[float, float]], steps: int = DERING_BISECTION_STEPS) -> NDArray:
     """The runtime's sky (gibbs=False) deringed with the least window of a *continuous* size: irradiance (S, 9, 3).
 
-    The runtime takes the least of the table's 7 rows that makes the irradiance
-    non-negative; here the size w is bisected in [5.6, 1e4] on the exact minimum (one
-    window for all channels, as the runtime): what the deringing gives without the
-    table's steps.
+    The runtime takes the least position along the table's 7 rows (linear between them) that
+    makes the irradiance non-negative; here the size w is bisected in [5.6, 1e4] on the
+    exact minimum (one window for all channels, as the runtime): a search over the
+    window's size instead of the table's path.
     """
     ts, tu = sky_arrays(skies)
     raw = sky.coefficients(ts, tu, 0.0, bands=3, gibbs=False, dering=False)
@@ -315,6 +315,13 @@ def continuous_dering(sky: Any, skies: list[tuple[float, float]], steps: int = D
         good = nonnegative(mid)
         lo, hi = np.where(good, mid, lo), np.where(good, hi, mid)
     return irradiance(np.where(nonnegative(np.full(len(skies), np.inf)), np.inf, lo))
+
+
+def row_dering(sky: Any, skies: list[tuple[float, float]]) -> NDArray:
+    """The runtime's sky (gibbs=False) deringed with the least whole row of the table
+    (``dering(method="table")``, the default until issue 25): irradiance (S, 9, 3)."""
+    ts, tu = sky_arrays(skies)
+    return dering(sky.coefficients(ts, tu, 0.0, bands=3, gibbs=False, dering=False), method="table")[0] * irf.LOBE[:, None]
 
 
 def solve_job(job: tuple[NDArray, irf.Objective]) -> NDArray:

@@ -14,7 +14,7 @@ function, like the C arrays the Habel seed published, ready to paste.
 -   :data:`EXPORT_FORMATS`, :data:`C_REAL_TYPES`, :data:`DEFAULT_FILE_NAMES`.
 
 C, GLSL and HLSL are one kernel, ``skysh/export/templates/c_like_kernel.h`` (with its
-deringing, ``c_like_dering3.h``), written once over a few words each language defines
+deringing, ``c_like_dering3.h`` or, in C at 5..7 bands, ``c_like_dering_certificate_c.h``), written once over a few words each language defines
 (:data:`skysh.export.dering.WORDS`: ``c_like_words_c.h``, ``c_like_words_glsl.glsl`` or
 ``c_like_words_hlsl.hlsl`` then the shaders' shared ``c_like_words_shader.glsl``, and the math names
 of ``c_like_words_math.h``: types, qualifiers, math functions, as sphericart writes one kernel for CPU
@@ -59,8 +59,9 @@ from :mod:`skysh.model.preetham`, never retyped):
 5.  Rotation about Z (Habel eq. 4) by ``phi = fmod(sun_azimuth, 2 pi)`` as the
     runtime reduces it: coefficient ``l (l + 1) + m`` is ``acc[l (l + 1) / 2 +
     |m|]`` times ``cos(m phi)`` (m >= 0) or ``sin(|m| phi)`` (m < 0).
-6.  Deringing, when asked, for 3 bands (:mod:`skysh.export.dering`: the
-    runtime's window, Sloan 2017); other band counts refuse it.
+6.  Deringing, when asked (:mod:`skysh.export.dering`: the runtime's least
+    window, Sloan 2017): C at every band count, GLSL and HLSL at 1..4 bands
+    (5..7 need the certificate, C-only: the shaders refuse ``dering`` there).
 7.  The sun and the ground, when asked (:mod:`skysh.export.lights`, the order of
     :mod:`skysh.lighting.lights`): the sun's windowed delta (colour clamped at 0) and a
     Lambertian ground lit by the unfiltered sky's c_10 and the sun.
@@ -105,6 +106,7 @@ from numpy.typing import ArrayLike
 from skysh import runtime
 from skysh._version import __version__
 from skysh.checks import check_choice, interval_text
+from skysh.export import dering as export_dering
 from skysh.export import js as export_js
 from skysh.export import template
 from skysh.export.dering import dering_defines, words
@@ -141,12 +143,13 @@ def _numbers(values: ArrayLike, literal: Literal, per_line: int = 6) -> str:
     return number_rows([literal(v) for v in np.ravel(np.asarray(values, dtype=np.float64))], "    ", per_line)
 
 
-def _defines(tables: ExportTables, literal: Literal) -> str:
+def _defines(tables: ExportTables, literal: Literal, language: str) -> str:
     """The data section's ``#define`` lines: sizes, switches and the numbers of the domain and the models."""
     lights, k = tables.lights, tables.lights.constants
     sizes = {"BANDS": tables.bands, "COUNT": tables.bands**2, "HALF": len(tables.half_layout),
              "ROWS": len(tables.half_layout) + (tables.bands == 1), "DX": tables.degrees[0], "DY": tables.degrees[1],
-             "SUN_DX": lights.sun_degrees[0], "SUN_DY": lights.sun_degrees[1], "DERING": int(tables.bands == 3),
+             "SUN_DX": lights.sun_degrees[0], "SUN_DY": lights.sun_degrees[1],
+             "DERING": int(export_dering.supported(language, tables.bands)),
              "LIGHTS": light_flags(lights), "IRRADIANCE_TABLE": int(tables.bands == 3 and tables.irradiance is not None),
              "BY_INTENT": f"({BY_INTENT})"}
     (zmin, zmax), (tmin, tmax) = tables.sun_zenith_domain, tables.turbidity_domain
@@ -166,14 +169,14 @@ def _r_major(table: np.ndarray) -> np.ndarray:
     return table.reshape(-1, table.shape[2], 3).transpose(1, 0, 2)
 
 
-def _data(tables: ExportTables, literal: Literal) -> str:
+def _data(tables: ExportTables, literal: Literal, language: str) -> str:
     """The data section (``c_like_data.h``) filled with the export's numbers."""
     rows, lights = _r_major(tables.table), tables.lights
     irradiance = tables.irradiance if tables.bands == 3 else None  # the certified table: 3 bands only
     if tables.bands == 1:  # the unfiltered c_10 (the ground's E_h) as row 1; with 2+ bands it is stored row 1
         rows = np.concatenate([rows, lights.c10.reshape(1, -1, 3)])
     return template.fill(
-        "c_like_data.h", DEFINES=_defines(tables, literal), TABLE=_numbers(rows, literal),
+        "c_like_data.h", DEFINES=_defines(tables, literal, language), TABLE=_numbers(rows, literal),
         GIBBS=_numbers(tables.gibbs, literal), LOBE=_numbers(tables.lobe, literal), PEREZ=_numbers(PEREZ_Y, literal),
         IRRADIANCE="" if irradiance is None else _numbers(_r_major(irradiance), literal),
         SUN_TABLE=_numbers(lights.sun_table, literal), SUN_RGB=_numbers(lights.rgb_from_xyz, literal),
@@ -215,11 +218,12 @@ def _c_like_source(tables: ExportTables, language: str, real: str, plan: EngineP
     """The C header, or the GLSL or HLSL functions: the words, the numbers, the kernel."""
     c = language == "c"
     literal: Literal = (lambda v: real_literal(v, real)) if c else float32_literal
-    parts = [words(language), _data(tables, literal)]
+    parts = [words(language), _data(tables, literal, language)]
     if plan is not None:
         parts.append(_engine(plan, literal))
-    if tables.bands == 3:  # the runtime's deringing (3 bands), in double in C, float in the shaders
-        parts += [dering_defines("irradiance", "double" if c else "float"), template.text("c_like_dering3.h")]
+    if export_dering.supported(language, tables.bands):  # the runtime's deringing: double in C, float in the shaders
+        parts += [dering_defines("irradiance", "double" if c else "float", bands=tables.bands),
+                  template.text(export_dering.dering_file(tables.bands))]
     body = "\n".join([*parts, template.text("c_like_kernel.h"), api_source(language)])
     if not c:
         return template.fill("c_like_frame_shader.glsl", NOTICE=_notice(tables, language, "float32", "", plan), BODY=body)

@@ -16,7 +16,7 @@ and ``js_module.d.mts`` (:mod:`skysh.export.template`): every statement is fixed
 checked as it stands by ``tests/export/test_js_template.py`` (node, tsc). Python fills in the
 header's words and ONE data object, ``DATA``: the numbers of
 :func:`skysh.export.tables.export_tables` (the sky's table, the certified irradiance table, the
-sun's and the ground's tables), the 3-band deringing's constants (:mod:`skysh.post.dering`,
+sun's and the ground's tables), the deringing's window tables and constants (:mod:`skysh.post.dering`,
 :mod:`skysh.sh.minimum`) and, for every engine and band count it takes, its
 :func:`skysh.export.tables.engine_plan` as a sparse index-and-factor table that one loop reads.
 Every number is written by :func:`skysh.literals.double_literal` (the shortest text that reads
@@ -59,6 +59,7 @@ from numpy.typing import NDArray
 from skysh import runtime
 from skysh._version import __version__
 from skysh.checks import interval_text
+from skysh.export import dering as export_dering
 from skysh.export import template
 from skysh.export.lights import light_flags
 from skysh.export.tables import EnginePlan, ExportTables, engine_plan, export_tables
@@ -79,8 +80,6 @@ DECLARATIONS_TEMPLATE: str = "js_module.d.mts"
 JSON_TEMPLATE: str = "js_export.json"
 """The JSON export's fixed text (layouts, the algorithm in words), its numbers ``null`` until filled."""
 
-DERING_BANDS: int = 3
-"""The band count the module derings (the runtime's deringing as exact code: 3 bands only)."""
 
 _PER_LINE: int = 6
 """Numbers per line of an array in the data object."""
@@ -151,12 +150,24 @@ def _plan_data(plan: EnginePlan | None) -> dict[str, Any] | None:
             "index": index, "factor": factor, "offset": plan.offset}
 
 
-def _dering_data() -> dict[str, Any]:
-    """The constants of the module's 3-band deringing: :func:`skysh.post.dering.dering`'s (target irradiance)."""
-    rows = dering.window_table(DERING_BANDS, "irradiance")
-    return {"s1": rows[:, 1], "s2": rows[:, 2], "kernel": sh.cosine_lobe(DERING_BANDS),
-            "basis": [sh.Y00, sh.K_LINEAR, sh.K_PRODUCT, sh.K_ZONAL, sh.K_SECTORAL],
-            "guards": [shmin.TINY, shmin.FLOOR, shmin.POLE, shmin.ALLOWANCE], "steps": shmin.NEWTON_STEPS}
+def _dering_data(bands: int) -> dict[str, Any]:
+    """The constants of the module's deringing at 1 .. ``bands`` bands: :func:`skysh.post.dering.dering`'s (target
+    irradiance, the least window), with the certificate's (:mod:`skysh.sh.minimum`) where a band count needs it
+    (:func:`skysh.post.dering.exact_target`)."""
+    windows = [dering.window_table(n, "irradiance") for n in range(1, bands + 1)]
+    certificate = None
+    if not dering.exact_target(bands):
+        lists = export_dering.certificate_lists(bands)
+        certificate = {"directions": shmin.DIRECTIONS, "cover": shmin.COVER_RADIUS, "split": shmin.SPLIT,
+                       "levels": shmin.LEVELS, "rounding": shmin.SAMPLE_ROUNDING, "diag": lists["DIAG"],
+                       "next": lists["NEXT"], "a": lists["RA"], "b": lists["RB"], "bandNorm": lists["BAND_NORM"],
+                       "final": export_dering.FINAL_SLACK, "golden": export_dering.GOLDEN, "budget": shmin.CELL_BUDGET}
+    counts = range(1, bands + 1)
+    return {"rows": len(windows[0]), "windows": windows, "exact": [dering.exact_target(n) for n in counts],
+            "lattice": [round(1.0 / dering.tolerance(n)) for n in counts], "subnormal": dering.SUBNORMAL_EXPONENT,
+            "kernel": sh.cosine_lobe(bands), "basis": [sh.Y00, sh.K_LINEAR, sh.K_PRODUCT, sh.K_ZONAL, sh.K_SECTORAL],
+            "guards": [shmin.TINY, shmin.FLOOR, shmin.POLE, shmin.ALLOWANCE], "steps": shmin.NEWTON_STEPS,
+            "certificate": certificate}
 
 
 def _rows(table: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -186,8 +197,7 @@ def _module_data(tables: ExportTables) -> dict[str, Any]:
                    "constants": dict(lights.constants), "sunTable": lights.sun_table, "rgbFromXyz": lights.rgb_from_xyz,
                    "trig": lights.trig, "windows": lights.windows, "ground": lights.ground_zonal},
         "irradiance": None if tables.irradiance is None else _rows(tables.irradiance),
-        "deringBands": [DERING_BANDS] if n >= DERING_BANDS else [],
-        "dering": _dering_data() if n >= DERING_BANDS else None,
+        "dering": _dering_data(n),
         "engines": [[name, [_plan_data(plan) for plan in row]] for name, row in plans.items()],
     }
 
@@ -220,7 +230,6 @@ def module_source(sky: runtime.SkySH, bands: int | None = None) -> str:
     names = ", ".join(json.dumps(name) for name, _ in data["engines"]) or "none in this module"
     return template.fill(
         MODULE_TEMPLATE, **_words(sky, tables), DATA=_data_text(data),
-        DERING_BANDS=", ".join(map(str, data["deringBands"])) or "none",
         ENGINE_LIST=textwrap.fill(names, width=90, initial_indent=" " * 60, subsequent_indent=" *               ").strip(),
         SUN_ZENITH_DOMAIN=interval_text(*tables.sun_zenith_domain, pi=True),
     )

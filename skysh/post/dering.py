@@ -5,10 +5,15 @@ Deringing: the least windowing that keeps SH lighting non-negative
 Sloan (2017), "Deringing Spherical Harmonics" (seed 000), in the sign convention of
 ``docs/conventions.md`` (orthonormal real SH with the Condon-Shortley phase, the seed's own).
 
--   :func:`dering`: the least row of :func:`window_table` that makes the reconstructed
-    irradiance (or radiance) non-negative in every colour channel (one window for all,
-    section 3), decided on the exact minimum (1..3 bands) or a certified lower bound of
-    it (4..7 bands), :mod:`skysh.sh.minimum`; batched, one route.
+-   :func:`dering`: the least window that makes the reconstructed irradiance (or radiance)
+    non-negative in every colour channel (one window for all, section 3): the seed's
+    search, a position along :func:`window_table` with linear interpolation between its
+    rows (:func:`least_window`), decided on the exact minimum (1..3 bands, 4-band irradiance:
+    to :data:`WINDOW_TOLERANCE` of a row) or a certified lower bound of it (5..7 bands, and
+    4-band radiance: to :data:`CERTIFIED_TOLERANCE`), :mod:`skysh.sh.minimum`; or, with
+    ``method="table"``, the least whole row. Batched.
+-   :func:`least_window`, :func:`window_at`, :func:`exact_target`, :func:`tolerance`: the position
+    searched, its factors, and which minimum decides at what tolerance.
 -   :data:`WINDOW_TABLE`, :func:`window_table`, :func:`sinc4_window` (eq. 6),
     :func:`delta_minimum`, :func:`linear_attenuation`: the windows and their derivation.
 -   :data:`PUNCTUAL_WINDOW`, :func:`directional_light_sh`: direct lights (section 3).
@@ -49,8 +54,9 @@ from skysh.sh import basis as sh
 from skysh.sh import minimum as shmin
 from skysh.sh.minimum import exact_min
 
-__all__ = ["DeringWarning", "DERING_TARGETS", "DELTA_MARGIN", "CERTIFIED_MARGIN", "PUNCTUAL_WINDOW", "delta_minimum",
-    "linear_attenuation", "window_table", "exact_min", "dering"]
+__all__ = ["DeringWarning", "DERING_TARGETS", "DERING_METHODS", "DELTA_MARGIN", "CERTIFIED_MARGIN", "PUNCTUAL_WINDOW",
+    "WINDOW_TOLERANCE", "CERTIFIED_TOLERANCE", "exact_target", "tolerance", "delta_minimum", "linear_attenuation",
+    "window_table", "window_at", "least_window", "exact_min", "dering"]
 
 
 class DeringWarning(UserWarning):
@@ -59,8 +65,16 @@ class DeringWarning(UserWarning):
 
 DERING_TARGETS: tuple[str, ...] = ("irradiance", "radiance")
 """What :func:`dering` makes non-negative: the clamped-cosine convolution, or the radiance."""
-DERING_METHODS: tuple[str, ...] = ("table",)
-"""Search methods of :func:`dering`: the least non-negative row of :func:`window_table`."""
+DERING_METHODS: tuple[str, ...] = ("window", "table")
+"""Search methods of :func:`dering`: ``"window"`` (the default) the least position along :func:`window_table`
+with linear interpolation between rows (the seed's section 3), ``"table"`` the least whole row."""
+
+CERTIFIED_TOLERANCE: float = 2.0**-5
+"""The same for certified targets (4..7 bands but 4-band irradiance): 1/32 of a row step."""
+
+WINDOW_TOLERANCE: float = 2.0**-10
+"""Tolerance of :func:`least_window`'s position, in row steps (1/1024 < 1e-3, a dyadic number: the
+bisection's points are exact): the position returned passes and one at most this much less does not."""
 MAX_DERING_BANDS: int = 7
 """Largest band count :func:`dering` accepts (49 coefficients)."""
 
@@ -170,6 +184,18 @@ class _Rows(NamedTuple):
     s2: NDArray
 
 
+def exact_target(bands: int, target: str = "irradiance") -> bool:
+    """Whether the target of ``bands`` is a 3-band function, decided on the exact minimum: 1..3 bands, and
+    4-band irradiance (A_3 = 0); else the certificate decides."""
+    return bands <= 3 or (bands == 4 and target == "irradiance")
+
+
+def tolerance(bands: int, target: str = "irradiance") -> float:
+    """The window position's tolerance for ``bands`` and ``target``: :data:`WINDOW_TOLERANCE` where the exact
+    minimum decides (:func:`exact_target`), :data:`CERTIFIED_TOLERANCE` where the certificate does."""
+    return WINDOW_TOLERANCE if exact_target(bands, target) else CERTIFIED_TOLERANCE
+
+
 @cache
 def _rows(bands: int, target: str) -> _Rows:
     """The search's setting of ``bands`` and ``target``, built once (:func:`window_table` reads its table)."""
@@ -180,7 +206,7 @@ def _rows(bands: int, target: str) -> _Rows:
     l_of = sh.band_of_index(bands)
     pad = np.where(np.arange(3) < bands, rows[:, :3], 0.0)
     kernel = KERNELS[target][l_of]
-    quadratic = bands <= 3 or (bands == 4 and target == "irradiance")  # A_3 = 0: a 3-band target
+    quadratic = exact_target(bands, target)
     k = min(bands, 3) ** 2
     form = kernel[:k, None] * shmin.FORM_MAP[:k] if quadratic else np.zeros((0, 13))
     out = _Rows(np.ascontiguousarray(rows[:, :bands]), rows[:, l_of, None], rows[:, l_of] * kernel,
@@ -214,24 +240,69 @@ def _first(values: NDArray, floor: float) -> NDArray:
     return np.where(ok.any(-1), np.argmax(ok, -1), ok.shape[-1])
 
 
-def _least_row3(t: NDArray, rows: _Rows) -> NDArray:
-    """:func:`_least_row` for 1..3 bands, exact: every row's dual and a point of it from one
-    eigendecomposition (a row scales g by s1 and Q by s2). Per function, what cannot change
-    the answer is skipped: row 0 certified by its dual at x = |g|/2; after one Newton step, a
-    certified row whose earlier rows all take a negative value at their dual's point. The
-    rest take the remaining steps (the cluster bounds, then :data:`shmin.NEWTON_STEPS`)."""
+class _Spectrum(NamedTuple):
+    """A 1..3-band target per function and channel, row 0: c0 (n, C), the eigenvalues ``lam`` of Q
+    (n, C, 3) ascending, their gaps ``d`` to the first, ``gam = V^T g`` and the weights ``a = gam^2 / 4``.
+    A window (1, s1, s2) scales g by s1 and Q by s2: every window shares it."""
+
+    c0: NDArray
+    lam: NDArray
+    d: NDArray
+    a: NDArray
+    gam: NDArray
+
+    def take(self, i: NDArray) -> _Spectrum:
+        """The functions i (an index array) of it."""
+        return _Spectrum(*(x[i] for x in self))
+
+
+def _spectrum(t: NDArray, rows: _Rows) -> _Spectrum:
+    """The :class:`_Spectrum` of normalised SH t (n, C, K), K the target's first 1..9 coefficients."""
     cg = t @ rows.form_cg
     lam, v = np.linalg.eigh((t @ rows.form_q).reshape(t.shape[:-1] + (3, 3)))
     gam = (cg[..., None, 1:] @ v)[..., 0, :]
-    a, d, c0 = 0.25 * gam * gam, lam - lam[..., :1], cg[..., 0]
-    x = np.maximum(np.sqrt(a @ shmin.ONES), shmin.FLOOR)
-    ok = np.minimum.reduce(shmin.dual(c0, lam, d, a, x), 1) >= shmin.ALLOWANCE
+    return _Spectrum(cg[..., 0], lam, lam - lam[..., :1], 0.25 * gam * gam, gam)
+
+
+def _minima3(sp: _Spectrum, s1: NDArray, s2: NDArray) -> tuple[NDArray, NDArray]:
+    """Per function and channel (n, C), the certified minimum less the rounding allowance with the window
+    (1, s1, s2) (n,): the dual after the proven start, one Newton step, the cluster bounds and the
+    remaining steps; the window passes where every channel's is >= 0. Also the dual's multiplier x."""
+    s1b, s2b = s1[:, None, None], s2[:, None, None]
+    lam, d, a = sp.lam * s2b, sp.d * s2b, sp.a * (s1b * s1b)
+    x = shmin.newton(d, a, shmin.cluster_bounds(d, a, shmin.newton(d, a, shmin.prefix_bound(d, a), 1)),
+                     shmin.NEWTON_STEPS)
+    return shmin.dual(sp.c0, lam, d, a, x) - shmin.ALLOWANCE, x
+
+
+def _rates3(sp: _Spectrum, s1: NDArray, s2: NDArray, x: NDArray, ds1: NDArray, ds2: NDArray) -> NDArray:
+    """Each minimum's rate (n, C) as the factors move by ``ds1``, ``ds2`` (n,), from :func:`_minima3`'s x: the
+    envelope theorem, the rate of ``s1 g.w + s2 w^T Q w`` at the dual's minimiser w."""
+    y = -0.5 * s1[:, None, None] * sp.gam / (sp.d * s2[:, None, None] + x[..., None])
+    y[..., 0] += np.sqrt(np.maximum(1.0 - (y * y) @ shmin.ONES, 0.0))  # the hard case's free component
+    return ds1[:, None] * ((sp.gam * y) @ shmin.ONES) + ds2[:, None] * ((sp.lam * y * y) @ shmin.ONES)
+
+
+def _passes3(sp: _Spectrum, s1: NDArray, s2: NDArray) -> NDArray:
+    """Per function (n,), whether the window (1, s1, s2) passes in every channel (:func:`_minima3`)."""
+    return np.logical_and.reduce(_minima3(sp, s1, s2)[0] >= 0.0, 1)
+
+
+def _least_row3(sp: _Spectrum, rows: _Rows) -> NDArray:
+    """:func:`_least_row` for 3-band targets (1..3 bands, 4-band irradiance), exact: every row's dual and a point of it from one
+    eigendecomposition. Per function, what cannot change the answer is skipped: row 0 certified
+    by its dual at x = |g|/2; after one Newton step, a certified row whose earlier rows all take
+    a negative value at their dual's point. The rest take the remaining steps (the cluster
+    bounds, then :data:`shmin.NEWTON_STEPS`)."""
+    x = np.maximum(np.sqrt(sp.a @ shmin.ONES), shmin.FLOOR)
+    ok = np.minimum.reduce(shmin.dual(sp.c0, sp.lam, sp.d, sp.a, x), 1) >= shmin.ALLOWANCE
+    n = len(ok)
     if ok.all():
-        return np.zeros(len(t), dtype=np.intp)
+        return np.zeros(n, dtype=np.intp)
     todo = np.flatnonzero(~ok) if ok.any() else slice(None)
-    lam, d = lam[todo, :, None] * rows.s2, d[todo, :, None] * rows.s2
-    a, gam = a[todo, :, None] * rows.s1sq, gam[todo, :, None] * rows.s1
-    c0 = c0[todo, :, None]
+    lam, d = sp.lam[todo, :, None] * rows.s2, sp.d[todo, :, None] * rows.s2
+    a, gam = sp.a[todo, :, None] * rows.s1sq, sp.gam[todo, :, None] * rows.s1
+    c0 = sp.c0[todo, :, None]
     x = shmin.newton(d, a, shmin.prefix_bound(d, a), 1)
     w = 1.0 / (d + x[..., None])
     first = _first(c0 + lam[..., 0] - x - (a * w) @ shmin.ONES, shmin.ALLOWANCE)
@@ -246,37 +317,162 @@ def _least_row3(t: NDArray, rows: _Rows) -> NDArray:
         first[left] = _first(shmin.dual(c0, lam, d, a, x), shmin.ALLOWANCE)
     if isinstance(todo, slice):
         return first
-    out = np.zeros(len(t), dtype=np.intp)
+    out = np.zeros(n, dtype=np.intp)
     out[todo] = first
     return out
 
 
+def _passes(flat: NDArray, vals: NDArray, n_ch: int) -> NDArray:
+    """4..7 bands: per function, whether the certificate puts every channel of the windowed
+    normalised target flat (n * C, K) (level-0 values ``vals`` (n * C, M)) at >= 0: level 0,
+    then, where no channel was refuted by a sampled negative value, the full certificate for
+    the channels left undecided."""
+    best = vals.min(-1)
+    k2, allow = shmin.curvature(flat)
+    low = best - 0.5 * k2 * shmin.COVER_RADIUS**2 - allow
+    refuted = np.logical_or.reduce((best < 0.0).reshape(-1, n_ch), 1)
+    idx = np.flatnonzero((low < 0.0) & np.repeat(~refuted, n_ch))
+    if idx.size:
+        low[idx] = shmin.certified_min(flat[idx], 0.0, vals=vals[idx])[0]
+    return np.logical_and.reduce((low >= 0.0).reshape(-1, n_ch), 1)
+
+
 def _least_row(t: NDArray, rows: _Rows) -> NDArray:
     """Per function of t (n, C, K) (normalised SH), the least row certified non-negative in
-    every channel, R if none. 4..7 bands, row by row for the functions still undecided:
-    level 0 of the certificate, then, where no channel was refuted by a sampled negative
-    value, the full certificate for the channels left undecided."""
+    every channel, R if none: exact (1..3 bands, :func:`_least_row3`), or row by row for the
+    functions still undecided (:func:`_passes`)."""
     n, n_ch, k = t.shape
     if len(rows.form_cg):
-        return _least_row3(t[..., : len(rows.form_cg)], rows)
+        return _least_row3(_spectrum(t[..., : len(rows.form_cg)], rows), rows)
     first = np.full(n, len(rows.table))
     todo = np.arange(n)
     for row, factors in enumerate(rows.per_target):
         flat = (t[todo] * factors).reshape(-1, k)
-        vals = flat @ shmin.level0_basis(math.isqrt(k))
-        best = vals.min(-1)
-        k2, allow = shmin.curvature(flat)
-        low = best - 0.5 * k2 * shmin.COVER_RADIUS**2 - allow
-        refuted = np.logical_or.reduce((best < 0.0).reshape(-1, n_ch), 1)
-        idx = np.flatnonzero((low < 0.0) & np.repeat(~refuted, n_ch))
-        if idx.size:
-            low[idx] = shmin.certified_min(flat[idx], 0.0, vals=vals[idx])[0]
-        ok = np.logical_and.reduce((low >= 0.0).reshape(-1, n_ch), 1)
+        ok = _passes(flat, flat @ shmin.level0_basis(math.isqrt(k)), n_ch)
         first[todo[ok]] = row
         todo = todo[~ok]
         if todo.size == 0:
             break
     return first
+
+
+TANGENT_STEPS: int = 3
+"""Tangent steps of the exact fraction search before it falls back to bisection: from the left the
+tangents converge to each channel's crossing as Newton's method does (quadratically), so a few suffice;
+more only delay the fallback (``tools/dering_experiment.py`` times the search against whole rows)."""
+
+
+def _bisect(lo: NDArray, guess: NDArray, passes, gallop: bool, tolerance: float = WINDOW_TOLERANCE) -> NDArray:
+    """The least passing multiple of ``tolerance`` in (lo, 1], per function: ``passes(i, f)`` decides
+    functions i at fractions f; 1 passes, ``lo`` (n,) (a multiple) does not. The first candidate is
+    ``guess`` (n,) rounded up to a multiple; then, with ``gallop``, steps of 1, 2, 4, .. multiples away
+    from it (down from a passing guess, up from a failing one) until the answer is bracketed, and
+    bisection on multiples. Where the passing fractions form an interval ending at 1 (exactly so for
+    the exact minimum, concave in f), any bracketing order returns the same multiple (halvings of
+    [0, 1] do); the certificate's cell budget can break that, so the order is part of the definition."""
+    q = 1.0 / tolerance
+    lo, hi = lo.copy(), np.ones_like(lo)
+    step = np.ones_like(lo)  # in multiples
+    cand = np.clip(np.ceil(guess * q), lo * q + 1.0, q) / q
+    go, down = np.full(len(lo), gallop), np.zeros(len(lo), bool)
+    fresh = np.ones(len(lo), bool)
+    active = np.flatnonzero(hi - lo > tolerance)
+    cand = cand[active]
+    while active.size:
+        ok = passes(active, cand)
+        hi[active[ok]], lo[active[~ok]] = cand[ok], cand[~ok]
+        down[active[fresh[active]]] = ok[fresh[active]]
+        go[active] &= fresh[active] | (ok == down[active])  # galloping on while the side stays the same
+        fresh[active] = False
+        active = active[hi[active] - lo[active] > tolerance]
+        g, st = go[active], step[active]
+        nxt = np.where(down[active], hi[active] - st / q, lo[active] + st / q)
+        g &= (nxt > lo[active]) & (nxt < hi[active])
+        go[active], step[active] = g, np.where(g, 2.0 * st, st)
+        cand = np.where(g, nxt, np.floor(0.5 * (lo[active] + hi[active]) * q) / q)
+    return hi
+
+
+def _fraction3(sp: _Spectrum, rows: _Rows, row: NDArray) -> NDArray:
+    """:func:`_fraction` for exact targets. Each channel's minimum m_c(f) (less the allowance) is concave,
+    and the answer is the largest of the channels' crossings. Per channel, the tangent at a failing point
+    crosses zero at or below its crossing (the tangent lies above m_c), the chord to a passing point at
+    or above it; the largest over channels of each bounds the answer. When both bounds fall in one step
+    of :data:`WINDOW_TOLERANCE`, its upper end is the answer; when the tangents have converged (a step
+    below it; a passing point's chord can be poor, where the minimum peaks near the row),
+    the step above the lower bound is. Either is checked by one evaluation; elsewhere (a failed check, or
+    neither after :data:`TANGENT_STEPS` tangents) :func:`_bisect`."""
+    q, n, n_ch = 1.0 / WINDOW_TOLERANCE, len(row), sp.c0.shape[1]
+    s1, s2 = rows.s1[row - 1, 0], rows.s2[row - 1, 0]
+    ds1, ds2 = rows.s1[row, 0] - s1, rows.s2[row, 0] - s2
+    both, s1s, s2s = sp.take(np.tile(np.arange(n), 2)), np.concatenate([s1, s1 + ds1]), np.concatenate([s2, s2 + ds2])
+    m, x = _minima3(both, s1s, s2s)  # both rows at once
+    m_lo, k_lo, m_hi = m[:n], _rates3(both, s1s, s2s, x, np.tile(ds1, 2), np.tile(ds2, 2))[:n], m[n:]
+    lo, hi, answer = np.zeros((n, n_ch)), np.ones((n, n_ch)), np.ones(n)
+    todo = np.arange(n)
+    for step in range(TANGENT_STEPS + 1):
+        fail = m_lo[todo] < 0.0  # a channel passing at its lo point has crossed before it
+        tangent = lo[todo] - np.where(fail, m_lo[todo], 0.0) / np.maximum(k_lo[todo], shmin.TINY)
+        chord = lo[todo] + (hi[todo] - lo[todo]) * np.where(fail, m_lo[todo], 0.0) / np.minimum(
+            m_lo[todo] - m_hi[todo], -shmin.TINY)
+        upper = np.maximum.reduce(chord, 1)
+        lower = np.minimum(np.maximum.reduce(tangent, 1), upper)
+        answer[todo] = np.minimum(answer[todo], np.ceil(upper * q) / q)
+        closed = np.ceil(lower * q) >= np.ceil(upper * q)
+        settled = ~closed & (lower - np.maximum.reduce(lo[todo], 1) < WINDOW_TOLERANCE)
+        answer[todo[settled]] = np.ceil(lower[settled] * q) / q  # the tangent has converged: the step above it
+        keep = ~closed & ~settled
+        todo, f = todo[keep], lower[keep]
+        if todo.size == 0 or step == TANGENT_STEPS:
+            break
+        sub, s1f, s2f = sp.take(todo), s1[todo] + f * ds1[todo], s2[todo] + f * ds2[todo]
+        m, x = _minima3(sub, s1f, s2f)
+        k = _rates3(sub, s1f, s2f, x, ds1[todo], ds2[todo])
+        f2 = np.broadcast_to(f[:, None], m.shape)
+        fail, tighter = m < 0.0, (m >= 0.0) & (f2 < hi[todo])
+        lo[todo] = np.where(fail, f2, lo[todo])
+        m_lo[todo], k_lo[todo] = np.where(fail, m, m_lo[todo]), np.where(fail, k, k_lo[todo])
+        hi[todo], m_hi[todo] = np.where(tighter, f2, hi[todo]), np.where(tighter, m, m_hi[todo])
+    ok = _passes3(sp, s1 + answer * ds1, s2 + answer * ds2)
+    ok[todo] = False  # no bracket yet
+    redo = np.flatnonzero(~ok)
+    if redo.size:
+        sub, start = sp.take(redo), np.maximum.reduce(lo[redo], 1)  # the latest point known to fail
+        answer[redo] = _bisect(np.floor(start * q) / q, start, lambda i, f: _passes3(
+            sub.take(i), s1[redo][i] + f * ds1[redo][i], s2[redo][i] + f * ds2[redo][i]), False)
+    return answer
+
+
+def _fraction(t: NDArray, rows: _Rows, row: NDArray) -> NDArray:
+    """Per function of t (n, C, K) whose least passing row ``row`` (n,) is in [1, R - 1], the least
+    passing fraction f of the step from row - 1 (the factors ``table[row - 1] + f (table[row] -
+    table[row - 1])``, linear per band), by :func:`_bisect`. At every direction the target is linear
+    in f, so its minimum m(f) is concave. Exact targets: :func:`_fraction3`. Certified ones, to
+    :data:`CERTIFIED_TOLERANCE`, start from the least f at which every level-0 value reaches the
+    certificate's final slack (each side linear in f; below it the certificate cannot pass) and step
+    up from it."""
+    n_ch, k = t.shape[1:]
+    lo_rows, n = row - 1, len(t)
+    basis = shmin.level0_basis(math.isqrt(k))
+    p_lo = rows.per_target[lo_rows][:, None, :]
+    dp = rows.per_target[row][:, None, :] - p_lo
+    flat_lo, flat_hi = (t * p_lo).reshape(-1, k), (t * (p_lo + dp)).reshape(-1, k)
+    v_lo, v_hi = flat_lo @ basis, flat_hi @ basis
+    final = (shmin.COVER_RADIUS / shmin.SPLIT**shmin.LEVELS) ** 2
+    (k_lo, a_lo), (k_hi, a_hi) = shmin.curvature(flat_lo), shmin.curvature(flat_hi)
+    g_lo, g_hi = v_lo - (k_lo * final + a_lo)[:, None], v_hi - (k_hi * final + a_hi)[:, None]
+    neg = g_lo < 0.0
+    ratio = np.where(neg, g_lo / np.where(neg, np.minimum(g_lo - g_hi, -shmin.TINY), -1.0), 0.0)
+    start = np.clip(np.maximum.reduce(ratio.reshape(n, -1), 1), 0.0, 1.0)
+    dv = v_hi - v_lo
+
+    def passes(i: NDArray, f: NDArray) -> NDArray:
+        sel = (i[:, None] * n_ch + np.arange(n_ch)).ravel()
+        flat = (t[i] * (p_lo[i] + f[:, None, None] * dp[i])).reshape(-1, k)
+        return _passes(flat, v_lo[sel] + np.repeat(f, n_ch)[:, None] * dv[sel], n_ch)
+
+    start = np.floor(start / CERTIFIED_TOLERANCE) * CERTIFIED_TOLERANCE  # a multiple at or below the bound
+    return _bisect(start, start + CERTIFIED_TOLERANCE, passes, True, CERTIFIED_TOLERANCE)
 
 
 SUBNORMAL_EXPONENT: int = int(np.finfo(np.float64).minexp)
@@ -305,11 +501,66 @@ def _least_row_rounded(flat: NDArray, rows: _Rows) -> NDArray:
     return first
 
 
+def _search(c: NDArray, target: str, method: str) -> tuple[NDArray, NDArray, NDArray, _Rows]:
+    """Checked SH c (..., K, C): the flat functions (n, K, C), each one's window position (n,) (the
+    least passing; R - 1 where none passes) and failure flag (n,), and the setting's rows."""
+    flat = c.reshape((-1,) + c.shape[-2:])
+    rows = _rows(math.isqrt(c.shape[-2]), target)
+    t, e, zero = shmin.normalised(np.swapaxes(flat, -1, -2))
+    t[..., 0] += zero  # a zero channel's minimum is exactly 0: it passes, as the constant 1 does
+    k = len(rows.form_cg)
+    sp = _spectrum(t[..., :k], rows) if k else None  # quadratic targets: one eigendecomposition for every window
+    first = _least_row3(sp, rows) if sp is not None else _least_row(t, rows)
+    tiny = np.zeros(len(flat), bool)
+    if e.min(initial=0) <= SUBNORMAL_EXPONENT:  # a channel of subnormal size (a zero channel has e = 0)
+        tiny = np.logical_or.reduce(e <= SUBNORMAL_EXPONENT, -1)
+        first[tiny] = _least_row_rounded(flat[tiny], rows)
+    failed = first == len(rows.table)
+    position = np.minimum(first, len(rows.table) - 1).astype(np.float64)
+    if method == "window" and first.any():  # the fraction of the step below a passing row, not for subnormal ones
+        idx = np.flatnonzero((first > 0) & ~failed & ~tiny)
+        if idx.size:
+            position[idx] += (_fraction3(sp.take(idx), rows, first[idx]) if sp is not None
+                              else _fraction(t[idx], rows, first[idx])) - 1.0
+    return flat, position, failed, rows
+
+
+def _factors(rows: _Rows, position: NDArray) -> NDArray:
+    """The per-band factors (n, N) at window positions (n,): ``table[i] + f (table[j] - table[i])``, i =
+    floor(position), j = min(i + 1, R - 1), f = position - i (a whole position is its row exactly)."""
+    last = len(rows.table) - 1
+    i = np.minimum(position.astype(np.intp), last)
+    lo = rows.table[i]
+    return lo + (position - i)[:, None] * (rows.table[np.minimum(i + 1, last)] - lo)
+
+
+def window_at(position: ArrayLike, bands: int = 3, target: str = "irradiance") -> NDArray[np.float64]:
+    """The per-band factors (..., N) of :func:`window_table` at fractional ``position`` (...) in [0, R - 1]
+    (R its rows): row i where the position is i, linear per band between neighbouring rows."""
+    rows = _rows(check_bands(bands, high=MAX_DERING_BANDS), check_choice(target, "target", DERING_TARGETS))
+    p = as_float_array(position, "position")
+    high = len(rows.table) - 1
+    if not np.all((p >= 0.0) & (p <= high)):
+        raise ValueError(f"position must lie in [0, {high}] (the rows of window_table({bands}, {target!r})), got {p}")
+    return _factors(rows, p.ravel()).reshape(p.shape + (rows.table.shape[1],))
+
+
+def least_window(coeffs: ArrayLike, target: str = "irradiance", method: str = "window") -> tuple[NDArray, NDArray]:
+    """The window :func:`dering` applies, as a position along :func:`window_table` (...) in [0, R - 1]
+    (:func:`window_at` gives its factors), and whether none passes (...) (the position is then R - 1).
+    ``coeffs``, ``target``, ``method``: as :func:`dering`'s."""
+    check_choice(target, "target", DERING_TARGETS)
+    check_choice(method, "method", DERING_METHODS)
+    c, _, _ = check_coeffs(coeffs, high=MAX_DERING_BANDS)
+    _, position, failed, _ = _search(c, target, method)
+    return position.reshape(c.shape[:-2]), failed.reshape(c.shape[:-2])
+
+
 def dering(
-    coeffs: ArrayLike, target: str = "irradiance", method: str = "table", *, return_failed: bool = False
+    coeffs: ArrayLike, target: str = "irradiance", method: str = "window", *, return_failed: bool = False
 ) -> tuple[NDArray[np.float64], ...]:
     """
-    Window SH lighting as little as the table allows so that it is non-negative (section 2.4).
+    Window SH lighting as little as needed so that it is non-negative (sections 2.4, 3).
 
     Parameters
     ----------
@@ -319,7 +570,9 @@ def dering(
         ``"irradiance"``: ``E(n) = integral L(w) max(0, n.w) dw`` must be non-negative
         everywhere; ``"radiance"``: the radiance itself.
     method
-        ``"table"``, the only search: the least row of :func:`window_table`.
+        ``"window"`` (default): the seed's search, the least position along :func:`window_table`
+        with the factors linear between rows, to :func:`tolerance` of a row step;
+        ``"table"``: the least whole row (blurs more: the error report's section 5).
     return_failed
         Also return a boolean array (...,): True where no row is non-negative.
 
@@ -327,7 +580,7 @@ def dering(
     -------
     coeffs_out, scales[, failed]
         ``coeffs_out``: same shape, band l times ``scales[..., l]``; ``scales``: (..., N), the
-        row applied, the same for every channel; never NaN or inf.
+        window applied, the same for every channel; never NaN or inf.
 
     Warns
     -----
@@ -336,18 +589,23 @@ def dering(
 
     Notes
     -----
-    The row is the least whose target's minimum is >= 0 in every channel: 1..3 bands on
-    the exact minimum (:func:`exact_min`, less its 2.3e-13 rounding allowance), so exactly
-    the row a brute-force scan finds; 4..7 bands on the certified bound, so never
-    negative, and one row more than the least only when a minimum lies within the
-    certificate's slack of zero. The last row certifies every non-negative light, so
-    ``failed`` marks coefficients of none. Each channel is first divided by a power of two
-    (exact: decisions are scale-invariant). A function with a channel below 2^-1022 in
-    every coefficient (:data:`SUBNORMAL_EXPONENT`) is decided on its windowed coefficients
-    as returned (subnormal products round by more than eps of the channel), so the
-    returned target is non-negative at any magnitude; such a non-negative light may then
-    fail (flagged). Vectorised; one input is a batch of one.
-    Costs: ``benchmarks/bench_dering.py``.
+    First the least row whose target's minimum is >= 0 in every channel: 1..3 bands (and
+    4-band irradiance, whose band 3 the kernel zeroes) on the exact minimum
+    (:func:`exact_min`, less its 2.3e-13 rounding allowance), exactly the row a brute-force
+    scan finds; 4..7 bands on the certified bound, so never negative. Then, with
+    ``"window"``, the fraction f of the step from the row before it (:func:`least_window`):
+    at every direction the windowed target is linear in f, so its minimum is concave in f
+    and the passing fractions form one interval ending at 1; exact targets bracket its
+    crossing by tangents and chords (then bisection), certified ones gallop up from the
+    least f at which the level-0 samples can pass and bisect. The window returned is
+    always one that passed. The
+    last row certifies every non-negative light, so ``failed`` marks coefficients of none.
+    Each channel is first divided by a power of two (exact: decisions are scale-invariant).
+    A function with a channel below 2^-1022 in every coefficient
+    (:data:`SUBNORMAL_EXPONENT`) is decided, on whole rows, on its windowed coefficients as
+    returned (subnormal products round by more than eps of the channel), so the returned
+    target is non-negative at any magnitude; such a non-negative light may then fail
+    (flagged). Vectorised; one input is a batch of one. Costs: ``benchmarks/bench_dering.py``.
 
     Examples
     --------
@@ -360,22 +618,17 @@ def dering(
     check_choice(method, "method", DERING_METHODS)
     return_failed = check_flag(return_failed, "return_failed")
     c, vector, bands = check_coeffs(coeffs, high=MAX_DERING_BANDS)
-    flat = c.reshape((-1,) + c.shape[-2:])
-    rows = _rows(bands, target)
-    t, e, zero = shmin.normalised(np.swapaxes(flat, -1, -2))
-    t[..., 0] += zero  # a zero channel's minimum is exactly 0: it passes, as the constant 1 does
-    first = _least_row(t, rows)
-    if e.min(initial=0) <= SUBNORMAL_EXPONENT:  # a channel of subnormal size (a zero channel has e = 0)
-        tiny = np.flatnonzero(np.logical_or.reduce(e <= SUBNORMAL_EXPONENT, -1))
-        first[tiny] = _least_row_rounded(flat[tiny], rows)
-    failed = first == len(rows.table)
+    flat, position, failed, rows = _search(c, target, method)
     if failed.any():
         warnings.warn(f"dering: {int(failed.sum())} of {len(flat)} functions stay negative ({target}) even at the "
                       "most aggressive window: they are not the projection of any non-negative light; the last "
                       "window was applied to them.", DeringWarning, stacklevel=2)
-        first = np.minimum(first, len(rows.table) - 1)
-    out = (flat * rows.per_coeff[first]).reshape(c.shape)
-    scales = rows.table[first].reshape(c.shape[:-2] + (bands,))
+    if position.any():
+        factors = _factors(rows, position)
+        out = (flat * factors[:, sh.band_of_index(bands), None]).reshape(c.shape)
+    else:  # no function needs a window (row 0: every factor 1)
+        factors, out = np.ones((len(flat), bands)), c.copy()
+    scales = factors.reshape(c.shape[:-2] + (bands,))
     out = out[:, 0] if vector else out
     return (out, scales, failed.reshape(c.shape[:-2])) if return_failed else (out, scales)
 

@@ -30,7 +30,7 @@ from skysh.checks import as_float_array, check_coeffs, check_flag, read_only
 from skysh.sh import basis as sh
 from skysh.sh.basis import K_LINEAR, K_PRODUCT, K_SECTORAL, K_ZONAL, Y00  # the basis constants, once
 
-__all__ = ["FORM_MAP", "COVER_RADIUS", "LEVELS", "sphere_quadratic", "exact_min"]
+__all__ = ["FORM_MAP", "COVER_RADIUS", "LEVELS", "CELL_BUDGET", "sphere_quadratic", "exact_min"]
 
 MAX_MIN_BANDS: int = 7
 """Largest band count of :func:`exact_min` (49 coefficients)."""
@@ -85,10 +85,12 @@ LEVELS, VALUE_LEVELS = 6, 12
 """Refinement levels when deciding "minimum >= 0" (final half-diagonal 1.9e-3 rad) and in
 :func:`exact_min` (2.9e-5 rad)."""
 
-_CELL_BUDGET, _VALUE_BUDGET = 2_000, 20_000
+CELL_BUDGET: int = 2_000
+"""Cells kept per function beyond which the deciding certificate stops refining (the bound stays
+valid, looser): caps the cost of ring-shaped or flat minima (a lone light's irradiance); the
+exports' certificates read it."""
+_VALUE_BUDGET: int = 20_000  # the same for exact_min's values
 _POINT_BLOCK: int = 1 << 16
-"""Cells kept per function beyond which refinement stops (the bound stays valid, looser):
-caps the cost of ring-shaped or flat minima (a lone light's irradiance)."""
 
 
 def normalised(f: NDArray) -> tuple[NDArray, NDArray, NDArray]:
@@ -216,7 +218,7 @@ def _values(f: NDArray, item: NDArray, p: NDArray) -> NDArray:
 
 
 def certified_min(f: NDArray, thr: NDArray | float, levels: int = LEVELS, vals: NDArray | None = None,
-                 budget: int = _CELL_BUDGET) -> tuple[NDArray, NDArray, NDArray]:
+                 budget: int = CELL_BUDGET) -> tuple[NDArray, NDArray, NDArray]:
     """Certified lower bound (P,), best sampled value (P,) and its direction (P, 3) of f (P, K)
     (level-0 values ``vals`` (P, M) if known).
 

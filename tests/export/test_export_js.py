@@ -245,17 +245,14 @@ def random_calls(count: int, seed: int = SEED) -> list[tuple[float, float, float
 def runtime_options(options: dict[str, Any]) -> dict[str, Any]:
     """The runtime's keyword arguments for a module call's options (the radiance for an engine), the module's
     documented defaults written out: absent gibbs and dering are the runtime's None (its rule by intent) except
-    where the module differs: an engine lights diffusely (gibbs false, dering where carried, and the irradiance
-    table by the irradiance rule), and a module without deringing at a band count has none (dering false)."""
+    that an engine lights diffusely (gibbs false, dering true, and the irradiance table by the irradiance rule)."""
     bands = options.get("bands", 3)
     gibbs, dering, table = options.get("gibbs"), options.get("dering"), options.get("irradianceTable")
     if "engine" in options:
         if table is None:  # the runtime's rule for irradiance, as engines light diffusely
             table = bands == 3 and gibbs is not True and dering is not False
         gibbs = False if gibbs is None else gibbs
-        dering = bands == 3 if dering is None else dering
-    elif dering is None and bands != 3:
-        dering = False  # the module derings 3 bands only (its DERING_BANDS)
+        dering = True if dering is None else dering
     return dict(bands=bands, gibbs=gibbs, dering=dering, irradiance=options.get("irradiance", False),
                 sun=options.get("sun", False), ground_albedo=options.get("groundAlbedo", 0.0), irradiance_table=table)
 
@@ -303,22 +300,20 @@ class TestAgainstRuntime:
             assert dc_relative_error(got, python_reference(sky, ts, t, phi, options)) < JS_TOLERANCE
 
     def test_defaults(self, sky: SkySH, module_dir: Path, node: NodeServer) -> None:
-        """Omitted arguments: azimuth 0, bands 3, gibbs = !irradiance, dering = irradiance where carried;
-        the radiance defaults are the Python runtime's (the irradiance ones too where deringing is carried)."""
-        carried = 3 in dering_bands(module_dir)
+        """Omitted arguments: azimuth 0, bands 3, gibbs = !irradiance, dering = irradiance; the Python runtime's
+        defaults (every band count's irradiance default: tests/export/test_export_js_dering.py)."""
         reply = node.run(module_dir, [
             [0.4, 4.0], [0.4, 4.0, 0.0, {"bands": 3, "gibbs": True, "irradiance": False, "dering": False}],
             [0.4, 4.0, 0.0, {"irradiance": True}],
-            [0.4, 4.0, 0.0, {"bands": 3, "gibbs": False, "irradiance": True, "dering": carried}],
+            [0.4, 4.0, 0.0, {"bands": 3, "gibbs": False, "irradiance": True, "dering": True}],
         ])
         values = [r["values"] for r in reply["results"]]
         assert values[0] == values[1] and len(values[0]) == 27
         assert values[2] == values[3]
         got = np.array(values[0]).reshape(-1, 3)
         assert dc_relative_error(got, sky.coefficients(0.4, 4.0)) < JS_TOLERANCE
-        if carried:  # the runtime's default for 3-band irradiance: the certified table
-            got = np.array(values[2]).reshape(-1, 3)
-            assert dc_relative_error(got, sky.coefficients(0.4, 4.0, irradiance=True)) < JS_TOLERANCE
+        got = np.array(values[2]).reshape(-1, 3)  # the runtime's default for 3-band irradiance: the certified table
+        assert dc_relative_error(got, sky.coefficients(0.4, 4.0, irradiance=True)) < JS_TOLERANCE
 
     def test_out_is_filled_in_place(self, module_dir: Path) -> None:
         script = (
@@ -387,8 +382,8 @@ exact minimum over the sphere."""
 
 
 def table_calls(count: int = TABLE_INPUTS, seed: int = SEED + 18) -> list[tuple[float, float, float, dict[str, Any]]]:
-    """Random calls: bands 3 two times in three (else 1-7), gibbs/dering/irradiance absent, true or false (dering
-    true at 3 bands only, where the module carries it), irradianceTable absent, null, true or false, an engine every
+    """Random calls: bands 3 two times in three (else 1-7), gibbs/dering/irradiance absent, true or false,
+    irradianceTable absent, null, true or false, an engine every
     fifth 3-band call, the sun and a ground now and then; the domain's corners first, one in ten on an edge."""
     rng = np.random.default_rng(seed)
     names = [name for name, bands in engine_cases() if bands == 3]
@@ -400,7 +395,7 @@ def table_calls(count: int = TABLE_INPUTS, seed: int = SEED + 18) -> list[tuple[
         for key, values, pick in (("gibbs", (True, False), k // 3), ("dering", (True, False), k // 9),
                                   ("irradiance", (True, False), k // 27), ("irradianceTable", (None, True, False), k // 81)):
             choice = pick % (len(values) + 1)
-            if choice < len(values) and not (key == "dering" and values[choice] and bands != 3):
+            if choice < len(values):
                 options[key] = values[choice]
         if names and bands == 3 and k % 5 == 0 and not options.get("irradiance"):
             options["engine"] = names[k // 5 % len(names)]
@@ -490,14 +485,6 @@ class TestIrradianceTable:
         assert dc_relative_error(got, sky.coefficients(0.5, 3.0, 0.2, bands=2, irradiance=True, dering=False)) < JS_TOLERANCE
 
 
-def dering_bands(module_dir: Path) -> list[int]:
-    """The band counts the module derings (its DERING_BANDS: the data object's deringBands)."""
-    source = (module_dir / "sky_sh.mjs").read_text()
-    found = re.search(r'^  "deringBands": \[([^\]]*)\],$', source, re.MULTILINE)
-    assert found is not None
-    return [int(v) for v in found.group(1).split(",") if v.strip()]
-
-
 # --------------------------------------------------------------------------- #
 BAD_CALLS: list[tuple[list[Any], str, str]] = [
     ([-0.01, 3.0, 0.0], "RangeError", "sunZenith"),
@@ -567,12 +554,6 @@ class TestRefusals:
         reply = node.run(module_dir, [[0.5, 3.0, 0.0, {"engine": "godot"}]])
         for name in reply["engines"]:
             assert json.dumps(name) in reply["results"][0]["message"]
-
-    def test_dering_refused_where_not_carried(self, module_dir: Path, node: NodeServer) -> None:
-        reply = node.run(module_dir, [[0.5, 3.0, 0.0, {"bands": 7, "dering": True}]])
-        if 7 not in dering_bands(module_dir):
-            assert reply["results"][0]["error"] == "RangeError"
-            assert reply["results"][0]["message"].startswith("dering")
 
     def test_bands_argument_limits_the_module(self, sky: SkySH, tmp_path: Path, node: NodeServer) -> None:
         (tmp_path / "sky_sh.mjs").write_text(module_source(sky, bands=2))
@@ -665,7 +646,7 @@ def light_calls(count: int, seed: int = SEED + 11) -> list[tuple[float, float, f
     for k in range(count):
         bands = 1 + k % 7
         options: dict[str, Any] = {"bands": bands, "gibbs": (k // 7) % 2 == 0, "irradiance": (k // 14) % 2 == 0,
-                                   "dering": bands == 3 and (k // 28) % 2 == 0, "sun": (k // 3) % 2 == 0 or k % 10 == 0}
+                                   "dering": (k // 28) % 2 == 0, "sun": (k // 3) % 2 == 0 or k % 10 == 0}
         if k % 4:
             options["groundAlbedo"] = [float(v) for v in rng.uniform(0.0, 1.0, 3)] if k % 4 > 1 else 0.25
         if bands == 3 and names and k % 5 == 0:

@@ -40,6 +40,7 @@ from conftest import SKIP_NO_NODE, SKIP_NO_TSC
 
 from skysh import SkySH
 from skysh.app import viewer
+from skysh.export import dering as export_dering
 from skysh.export import template
 from skysh.export.js import DECLARATIONS_TEMPLATE, MODULE_TEMPLATE, module_source
 from skysh.export.tables import engine_plan, export_tables
@@ -57,7 +58,7 @@ FIXTURE: Path = Path(__file__).with_name("data") / "js_small_data.json"
 
 WORDS: dict[str, str] = {
     "VERSION": "0.0.0-small", "COMMAND_OPTIONS": " --bands 3", "MAX_BANDS": "3", "DEFAULT_BANDS": "3",
-    "DERING_BANDS": "3", "ENGINE_LIST": '"small"', "SUN_ZENITH_DOMAIN": "[0, pi/2]", "TURBIDITY_DOMAIN": "[2.5, 6]",
+    "ENGINE_LIST": '"small"', "SUN_ZENITH_DOMAIN": "[0, pi/2]", "TURBIDITY_DOMAIN": "[2.5, 6]",
 }
 """The header's words for the small module (the module's holes but DATA)."""
 
@@ -196,7 +197,7 @@ def settings(data: dict[str, Any], options: dict[str, Any]) -> tuple[int, bool, 
     if table is None:
         table = data["irradiance"] is not None and diffuse and n == 3 and gibbs is not True and deringing is not False
     gibbs = not (diffuse or table) if gibbs is None else gibbs
-    deringing = not table and (diffuse and n in data["deringBands"] if deringing is None else deringing)
+    deringing = not table and (diffuse if deringing is None else deringing)
     return n, gibbs, deringing, table
 
 
@@ -251,13 +252,15 @@ class TestFixture:
         """The fixture's model constants are skysh's: the comparisons with skysh's Python then mean something."""
         np.testing.assert_array_equal(data["perezY"], preetham.PEREZ_Y.ravel())
         assert data["zenithLuminance"] == list(preetham.ZENITH_LUMINANCE)
-        window = dering.window_table(3, "irradiance")
         block = data["dering"]
-        assert block["s1"] == window[:, 1].tolist() and block["s2"] == window[:, 2].tolist()
+        assert block["windows"] == [dering.window_table(n, "irradiance").ravel().tolist() for n in (1, 2, 3)]
+        assert block["rows"] == 7 and block["certificate"] is None  # 3 bands: no certificate
+        assert block["exact"] == [dering.exact_target(n) for n in (1, 2, 3)]
+        assert block["lattice"] == [1 / dering.tolerance(n) for n in (1, 2, 3)]
         assert block["kernel"] == sh.cosine_lobe(3).tolist()
         assert block["basis"] == [sh.Y00, sh.K_LINEAR, sh.K_PRODUCT, sh.K_ZONAL, sh.K_SECTORAL]
         assert block["guards"] == [shmin.TINY, shmin.FLOOR, shmin.POLE, shmin.ALLOWANCE]
-        assert block["steps"] == shmin.NEWTON_STEPS
+        assert block["steps"] == shmin.NEWTON_STEPS and block["subnormal"] == dering.SUBNORMAL_EXPONENT
 
     def test_holes_are_the_ones_filled(self) -> None:
         assert template.holes(MODULE_TEMPLATE) == set(WORDS) | {"DATA"}
@@ -282,6 +285,22 @@ class TestFixture:
         assert plans[3]["factor"] == [v for p in range(plan.offset.size) for _, v in plan.terms(p)]
         assert plans[3]["offset"] == plan.offset.tolist() and plans[3]["band"] == plan.band_factor.tolist()
         assert source.endswith(template.text(MODULE_TEMPLATE).split("{{DATA}}")[1])  # the code: the template's text
+
+    def test_the_certificate_numbers_are_python_s(self, sky: SkySH) -> None:
+        """At 7 bands the module's certificate constants are Python's (skysh.sh.minimum, skysh.post.dering), passed, not
+        recomputed in JavaScript: the final slack, the Fibonacci angle, the band norms and the recurrence's factors."""
+        source = module_source(sky, bands=7)
+        found = re.search(r"^const DATA = (\{\n.*?\n\});$", source, re.MULTILINE | re.DOTALL)
+        assert found is not None
+        block = json.loads(found.group(1))["dering"]
+        cert, lists = block["certificate"], export_dering.certificate_lists(7)
+        assert block["subnormal"] == dering.SUBNORMAL_EXPONENT and block["lattice"][4:] == [32, 32, 32]
+        assert cert["final"] == (shmin.COVER_RADIUS / shmin.SPLIT**shmin.LEVELS) ** 2
+        assert cert["golden"] == 3.0 - math.sqrt(5.0) and cert["directions"] == shmin.DIRECTIONS
+        assert cert["bandNorm"] == [math.sqrt((2 * l + 1) / (4 * math.pi)) for l in range(7)] == lists["BAND_NORM"]
+        assert cert["next"] == lists["NEXT"] and cert["diag"] == lists["DIAG"] and cert["a"] == lists["RA"]
+        code = template.text(MODULE_TEMPLATE)
+        assert "-1022" not in code and "Math.sqrt(5" not in code and "4.0 * Math.PI" not in code
 
     def test_formulas_written_once_in_javascript(self) -> None:
         """The zenith luminance (the only tan) and Kasten's air mass are written once in the package's JavaScript:
@@ -328,9 +347,9 @@ class TestUnderNode:
         assert worst_error(data, small_dir, calls[:6], lambda o: dict(o, irradianceTable=False)) > CONTROL_MARGIN * TOLERANCE
 
     def test_deringing_matches_the_runtimes(self, data: dict[str, Any], small_dir: Path) -> None:
-        """The module's 3-band deringing picks skysh.post.dering.dering's window (the fixture's sky rings)."""
+        """The module's deringing at 1..3 bands picks skysh.post.dering.dering's window (the fixture's sky rings)."""
         rng = np.random.default_rng(SEED + 3)
-        calls = random_calls(rng, 120, lambda k: {"bands": 3, "dering": True, "irradianceTable": False,
+        calls = random_calls(rng, 120, lambda k: {"bands": 1 + k % 3, "dering": True, "irradianceTable": False,
                                                   "gibbs": k % 2 == 0, "irradiance": k % 4 < 2})
         assert worst_error(data, small_dir, calls) < TOLERANCE
         windowed = 0
@@ -375,7 +394,7 @@ class TestUnderNode:
         ([0.5, 3.0, 0.0, {"engine": "small", "bands": 2}], "RangeError", "bands must be an integer in [1, 3] for engine "
                                                                          '"small" (the bands it takes: 1, 3)'),
         ([0.5, 3.0, 0.0, {"engine": "big"}], "RangeError", 'engine must be one of "small", got "big"'),
-        ([0.5, 3.0, 0.0, {"bands": 2, "dering": True}], "RangeError", "dering is available for bands 3, got bands 2"),
+        ([0.5, 3.0, 0.0, {"bands": 2, "dering": 1}], "TypeError", "dering must be true or false"),
         ([0.5, 3.0, 0.0, {"bands": 2, "irradianceTable": True}], "RangeError", "irradianceTable: true needs bands 3"),
         ([0.5, 3.0, 0.0, {"engine": "small", "irradiance": True}], "RangeError", "irradiance must be false"),
         ([0.5, 6.5, 0.0], "RangeError", "turbidity must lie in [2.5, 6]"),

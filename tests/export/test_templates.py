@@ -2,7 +2,8 @@
 The C, GLSL and HLSL exports' source files as they stand (skysh/export/templates/c_like_*)
 ==========================================================================================
 
-The exports are one C-like kernel (``c_like_kernel.h`` and its deringing ``c_like_dering3.h``) over the words
+The exports are one C-like kernel (``c_like_kernel.h`` and its deringing ``c_like_dering3.h``, in C at 5..7
+bands ``c_like_dering_certificate_c.h``) over the words
 of each language (``c_like_words_c.h``, ``c_like_words_glsl.glsl``, ``c_like_words_hlsl.hlsl``, the shaders'
 shared ``c_like_words_shader.glsl`` and the math names ``c_like_words_math.h``:
 :data:`skysh.export.dering.WORDS`), the public functions in C's and in the shaders' spelling
@@ -59,7 +60,8 @@ KERNEL_FILES: tuple[str, ...] = ("c_like_words_c.h", "c_like_dering3.h", "c_like
 
 HOLES: dict[str, frozenset[str]] = {name: frozenset(holes) for name, holes in {
     "c_like_words_c.h": (), "c_like_words_glsl.glsl": (), "c_like_words_hlsl.hlsl": (), "c_like_words_shader.glsl": (),
-    "c_like_words_math.h": (), "c_like_dering3.h": (), "c_like_kernel.h": (), "c_like_api_c.h": (),
+    "c_like_words_math.h": (), "c_like_dering3.h": (), "c_like_dering_certificate_c.h": (), "c_like_kernel.h": (),
+    "c_like_api_c.h": (),
     "c_like_api_shader.glsl": ("VEC3",),
     "c_like_data.h": ("DEFINES", "TABLE", "GIBBS", "LOBE", "PEREZ", "IRRADIANCE", "SUN_TABLE", "SUN_RGB", "SUN_TRIG",
                       "GROUND"),
@@ -289,13 +291,13 @@ SIGNATURES: dict[str, dict[str, tuple[str, ...]]] = {
           "skysh_engine_coefficients": ("int", "skysh_real", "skysh_real", "skysh_real", "int", "int", "int",
                                         "const skysh_real *", "int", "skysh_real [27]"),
           "skysh_sun_light": ("int", "skysh_real", "skysh_real", "skysh_real", "skysh_real [3]", "skysh_real [3]"),
-          "skysh_dering3": ("int", "double [9][3]", "double [3]")},
+          "skysh_dering": ("int", "double [9][3]", "double [3]", "double [1]")},
     "glsl": {"skysh_coefficients": ("bool", "float", "float", "float", "bool", "bool", "bool", "bool", "vec3", "int",
                                     "out vec3 [9]"),
              "skysh_engine_coefficients": ("bool", "float", "float", "float", "bool", "bool", "bool", "vec3", "int",
                                            "out float [27]"),
              "skysh_sun_light": ("bool", "float", "float", "float", "out vec3", "out vec3"),
-             "skysh_dering3": ("int", "inout float [27]", "out float [3]")},
+             "skysh_dering": ("int", "inout float [3 * 9]", "out float [3]", "out float [1]")},
 }
 """The public functions' (return type, parameter types...) as before the kernel (3 bands, engine "unity": 27 values);
 HLSL's are GLSL's with float3."""
@@ -341,8 +343,9 @@ def test_every_c_like_template_is_listed_with_its_holes() -> None:
 
 
 def test_the_code_files_are_the_same_for_every_language(exported: Exported) -> None:
-    """Each export holds the kernel (and, with 3 bands, the deringing) verbatim, and its own words and functions
-    (those the shaders share included), not another language's."""
+    """Each export holds the kernel and its deringing verbatim (c_like_dering3.h where the exact minimum decides, in C at
+    5..7 bands c_like_dering_certificate_c.h; the shaders refuse those), and its own words and functions (those the
+    shaders share included), not another language's."""
     for language in export_dering.LANGUAGES:
         source = exported(language, bands=3)
         assert template.text("c_like_kernel.h") in source and template.text("c_like_dering3.h") in source
@@ -352,13 +355,19 @@ def test_the_code_files_are_the_same_for_every_language(exported: Exported) -> N
         own = set(export_dering.WORDS[language])
         assert all(template.text(name) not in source for other in others for name in export_dering.WORDS[other]
                    if name not in own)
-    assert template.text("c_like_dering3.h") not in exported("c", bands=2)
+    assert template.text("c_like_dering3.h") in exported("c", bands=2)  # every band count derings (issue 25)
+    certificate = template.text("c_like_dering_certificate_c.h")
+    assert certificate in exported("c", bands=7) and template.text("c_like_dering3.h") not in exported("c", bands=7)
+    assert all(certificate not in exported(language, bands=7) for language in ("glsl", "hlsl"))  # C only
+    for language in ("glsl", "hlsl"):  # the shaders refuse the certificate's band counts
+        assert "#define SKYSH_DERING 0\n" in exported(language, bands=5) and "skysh_dering(" not in exported(language, bands=5)
 
 
 def test_dering_source_is_the_kernel_s() -> None:
     for language in export_dering.LANGUAGES:
         source = export_dering.dering_source(language, name="sky")
         assert source.startswith(export_dering.words(language)) and source.endswith(template.text("c_like_dering3.h"))
+    assert export_dering.dering_source("c", bands=6).endswith(template.text("c_like_dering_certificate_c.h"))
 
 
 class TestTemplateModule:

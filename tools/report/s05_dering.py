@@ -84,20 +84,21 @@ def _bound_slack(c3: dict[bool, NDArray], count: int) -> dict[str, dict[str, NDA
     return out
 
 
-def _detail(label: str, target: str, c: NDArray) -> dict[str, Any]:
-    """Relative L2 change of the target over the skies that need a window, and the time of one call."""
+def _detail(label: str, target: str, c: NDArray, method: str = "window") -> dict[str, Any]:
+    """Relative L2 change of the target over the skies that need a window, and the time of one call, by ``method``
+    (the least window, the default; or whole rows)."""
     kernel = KERNELS[target]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", dering.DeringWarning)  # counted in the windows table
-        out, scales = dering.dering(c, target=target)
+        out, scales = dering.dering(c, target=target, method=method)
         needy = (scales[:, 1:] < 1.0).any(axis=1)
-        row: dict[str, Any] = {"label": label, "windowed": int(needy.sum()), "n": c.shape[0]}
+        row: dict[str, Any] = {"label": label, "method": method, "windowed": int(needy.sum()), "n": c.shape[0]}
         if not needy.any():
             return row
         base = kernel(c[needy])
         change = np.sqrt(((kernel(out[needy]) - base) ** 2).sum(axis=-2) / (base**2).sum(axis=-2)).max(axis=-1)
         one = c[np.flatnonzero(needy)[0]]
-        seconds = best_time(lambda: dering.dering(one, target=target), *TIMING[math.isqrt(c.shape[-2])])
+        seconds = best_time(lambda: dering.dering(one, target=target, method=method), *TIMING[math.isqrt(c.shape[-2])])
     return {**row, "mean": float(change.mean()), "worst": float(change.max()), "seconds": seconds}
 
 
@@ -114,9 +115,9 @@ def compute(ctx: Context) -> dict[str, Any]:
         bar.update(1)
         slack = _bound_slack(c3, plan.random_functions)
         bar.update(1)
-        detail = [_detail("3 bands, irradiance, no filter", "irradiance", c3[False]),
-                  _detail("3 bands, radiance, filter", "radiance", c3[True]),
-                  _detail("7 bands, irradiance, no filter", "irradiance", c7)]
+        detail = [_detail(label, target, c, method) for label, target, c in (
+            ("3 bands, irradiance, no filter", "irradiance", c3[False]), ("3 bands, radiance, filter", "radiance", c3[True]),
+            ("7 bands, irradiance, no filter", "irradiance", c7)) for method in dering.DERING_METHODS]
         bar.update(1)
     return {"axes": (zen, tur), "windows": windows, "slack": slack, "detail": detail}
 
@@ -150,13 +151,18 @@ def _slack_figure(ctx: Context, slack: dict[str, dict[str, NDArray]]) -> str:
 
 def _detail_figure(ctx: Context, detail: list[dict[str, Any]]) -> str:
     fig, ax = plt.subplots(figsize=(9, 5), constrained_layout=True)
-    shown = [(row, colour) for row, colour in zip(detail, ("tab:blue", "tab:orange", "tab:green")) if row["windowed"]]
-    for row, colour in shown:
-        ax.plot(1e6 * row["seconds"], 100 * row["mean"], "o", color=colour, markersize=9, label=row["label"])
+    colours = dict(zip(dict.fromkeys(row["label"] for row in detail), ("tab:blue", "tab:orange", "tab:green")))
+    shown = [row for row in detail if row["windowed"]]
+    for row in shown:
+        window = row["method"] == "window"
+        ax.plot(1e6 * row["seconds"], 100 * row["mean"], "o" if window else "s", color=colours[row["label"]],
+                markersize=9, fillstyle="full" if window else "none",
+                label=f"{row['label']}: {'least window (default)' if window else 'whole rows'}")
     if not shown:
         ax.text(0.5, 0.5, "no sky needed a window", transform=ax.transAxes, ha="center")
     style_axes(ax, "time per call (us, one sky)", "mean relative L2 change of the target (%)",
-               "Deringing: detail removed against cost", xlog=True, ylog=True, legend={"fontsize": 7, "loc": "best"})
+               "Deringing: detail removed against cost (filled: the least window; hollow: whole rows)", xlog=True,
+               ylog=True, legend={"fontsize": 7, "loc": "best"})
     return ctx.save(fig, "s05_detail_cost.png")
 
 
@@ -199,17 +205,24 @@ def render(ctx: Context, d: dict[str, Any]) -> Section:
     shape = ctx.plan.dering_grid
     s.text(f"3-band sky radiance SH from `SkySH.coefficients` on a {shape[0]} x {shape[1]} grid of the domain "
            "(azimuth 0; the windows do not depend on it), with and without the Gibbs filter, and "
-           f"{d['windows'][3]['n']} of those skies at 7 bands, windowed by `skysh.post.dering.dering` (the least row of "
-           "`window_table` whose target is non-negative; `exact_min` decides for 3 bands, its certified bound "
-           "for 4..7).")
+           f"{d['windows'][3]['n']} of those skies at 7 bands, windowed by `skysh.post.dering.dering` (its default, the "
+           "least window: the least position along `window_table`, linear between rows, whose target is "
+           f"non-negative, to {sig(dering.WINDOW_TOLERANCE)} of a row step where `exact_min` decides (3 bands) and "
+           f"{sig(dering.CERTIFIED_TOLERANCE)} where its certified bound does (5..7); the windows table and the "
+           "figure below are the default's).")
     _render_windows(ctx, s, d)
     _render_slack(ctx, s, d["slack"])
     s.text("**Detail kept against cost**: relative L2 change of the target (irradiance or radiance) caused by the "
            "window, over the skies that need one, and the time of one call on one (K, 3) sky (best of "
            f"{TIMING[3][0]} rounds):")
-    s.table(["skies", "windowed", "mean L2 change", "worst L2 change", "time per call"],
-            [[r["label"], f"{r['windowed']} / {r['n']}", pct(r["mean"]), pct(r["worst"]), us(r["seconds"])]
-             if r["windowed"] else [r["label"], f"0 / {r['n']}", "-", "-", "- (no sky needs a window)"]
+    s.table(["skies", "method", "windowed", "mean L2 change", "worst L2 change", "time per call"],
+            [[r["label"], r["method"], f"{r['windowed']} / {r['n']}", pct(r["mean"]), pct(r["worst"]), us(r["seconds"])]
+             if r["windowed"] else [r["label"], r["method"], f"0 / {r['n']}", "-", "-", "- (no sky needs a window)"]
              for r in d["detail"]])
+    by = {(r["label"], r["method"]): r for r in d["detail"] if r["windowed"]}
+    first = d["detail"][0]["label"]
+    if (first, "window") in by and (first, "table") in by:
+        ctx.note("Deringing: mean irradiance change of the windowed 3-band skies, least window (default); whole rows",
+                 f"{pct(by[first, 'window']['mean'])}; {pct(by[first, 'table']['mean'])}", "the least window blurs less")
     s.figure(_detail_figure(ctx, d["detail"]), "Deringing: detail removed against time per call")
     return s

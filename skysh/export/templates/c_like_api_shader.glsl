@@ -8,8 +8,10 @@
 // (RGB in [0, 1], {{VEC3}}(0.0, 0.0, 0.0) for none) a Lambertian ground; irradianceTable SKYSH_BY_INTENT
 // (the runtime's default), 0 or 1 as skysh.SkySH.coefficients' irradiance_table None, False,
 // True. Returns false (coeffs zeroed) for a parameter outside the domain, dering without
-// SKYSH_DERING (3 bands), the sun or the ground without its table (SKYSH_LIGHTS), or an
-// irradianceTable refused (1 without SKYSH_IRRADIANCE_TABLE or with gibbs).
+// SKYSH_DERING (1..4 bands: 5..7 need the sampling certificate, C-only for its cost per call,
+// skysh.export.dering.CERTIFICATE_COST, measured by python
+// tests/export/test_export_dering_certificate.py), the sun or the ground without its table
+// (SKYSH_LIGHTS), or an irradianceTable refused (1 without SKYSH_IRRADIANCE_TABLE or with gibbs).
 bool skysh_coefficients(float sunZenith, float turbidity, float sunAzimuth, bool gibbs, bool dering, bool irradiance,
                         bool sun, {{VEC3}} groundAlbedo, int irradianceTable, out {{VEC3}} coeffs[SKYSH_COUNT])
 {

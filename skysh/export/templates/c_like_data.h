@@ -7,7 +7,7 @@
  * coefficients; SKYSH_ROWS the table's rows (the stored coefficients; one band: and the unfiltered
  * c_10, for the ground); SKYSH_DX, SKYSH_DY the Chebyshev degrees in x (sun zenith) and y (log
  * turbidity); SKYSH_SUN_DX, SKYSH_SUN_DY the sun table's, in its x (air mass) and y (turbidity);
- * SKYSH_DERING 1 where the dering option works (3 bands); SKYSH_LIGHTS 1 the sun is available, 2 the
+ * SKYSH_DERING 1 where the dering option works (C: 1..7 bands; GLSL, HLSL: 1..4); SKYSH_LIGHTS 1 the sun, 2 the
  * ground, 3 both; SKYSH_IRRADIANCE_TABLE 1 where the certified irradiance table is here;
  * SKYSH_BY_INTENT the irradiance_table value that means the runtime's default.
  *

@@ -10,7 +10,7 @@
  *     eq. 1), or of the certified irradiance table SKYSH_IRRADIANCE;
  *  4. the Gibbs filter and the luminance scale Y_z / F_Y(0, ts) (Preetham 1999);
  *  5. the rotation about Z by the sun's azimuth (Habel eq. 4);
- *  6. the deringing (3 bands, c_like_dering3.h);
+ *  6. the deringing (c_like_dering3.h; C at 5..7 bands: c_like_dering_certificate_c.h);
  *  7. the sun and the ground;
  *  8. the per-band factor (the clamped cosine A_l, or an engine's folded factor);
  *  9. with an engine, the rest of its linear map as (output, input, factor) terms and offsets.
@@ -253,11 +253,12 @@ SKYSH_FN SKYSH_STATUS skysh_evaluate(SKYSH_REAL sun_zenith, SKYSH_REAL turbidity
 #if SKYSH_DERING
     if (deringed) { /* step 6: SKYSH_DERING_NAME windows d in place, returns the window (unused here) */
         SKYSH_DERING_COEFFS(d);
-        SKYSH_DREAL window[3];
+        SKYSH_DREAL window[SKYSH_BANDS];
+        SKYSH_DREAL position[1];
         for (int n = 0; n < SKYSH_COUNT; ++n)
             for (int c = 0; c < 3; ++c)
                 SKYSH_DC(d, n, c) = coeffs[n][c];
-        SKYSH_DERING_NAME(d, window);
+        SKYSH_DERING_NAME(d, window, position);
         for (int n = 0; n < SKYSH_COUNT; ++n)
             for (int c = 0; c < 3; ++c)
                 coeffs[n][c] = SKYSH_TO_REAL(SKYSH_DC(d, n, c));

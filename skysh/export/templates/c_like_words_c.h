@@ -37,8 +37,11 @@ typedef double skysh_real;
 #define SKYSH_END }
 /* The deringing's words: double whatever skysh_real is. */
 #define SKYSH_DREAL double
-#define SKYSH_DERING_COEFFS(name) double name[9][3]
+#define SKYSH_DERING_COEFFS(name) double name[SKYSH_DERING_COUNT][3]
 #define SKYSH_DC(coeffs, k, ch) coeffs[k][ch]
+#define SKYSH_TO_DREAL(x) ((double)(x))
+#define SKYSH_TO_INT(x) ((int)(x))
+#define SKYSH_MIN_INT(a, b) ((a) < (b) ? (a) : (b))
 #define SKYSH_SQRT sqrt
 #define SKYSH_ABS fabs
 #define SKYSH_MAX fmax

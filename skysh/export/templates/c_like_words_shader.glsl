@@ -16,8 +16,11 @@
 #define SKYSH_ALBEDO_AT(albedo, c) (albedo)[c]
 #define SKYSH_TO_REAL(x) float(x)
 #define SKYSH_DREAL float
-#define SKYSH_DERING_COEFFS(name) float name[27]
+#define SKYSH_DERING_COEFFS(name) float name[3 * SKYSH_DERING_COUNT]
 #define SKYSH_DC(coeffs, k, ch) coeffs[(k) * 3 + (ch)]
+#define SKYSH_TO_DREAL(x) float(x)
+#define SKYSH_TO_INT(x) int(x)
+#define SKYSH_MIN_INT(a, b) min(a, b)
 #define SKYSH_SQRT sqrt
 #define SKYSH_ABS abs
 #define SKYSH_MAX max

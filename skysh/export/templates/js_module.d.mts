@@ -11,7 +11,7 @@ export interface CoefficientOptions {
   gibbs?: boolean;
   /** Irradiance instead of radiance (clamped-cosine convolution); default false; must be false with an engine. */
   irradiance?: boolean;
-  /** Window so the irradiance is never negative; default irradiance (or an engine) where available. */
+  /** Window so the irradiance is never negative (the least window, any band count); default irradiance (or an engine). */
   dering?: boolean;
   /**
    * The certified 3-band irradiance table (never negative) instead of the filtered, deringed sky: null (default) by
