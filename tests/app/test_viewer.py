@@ -800,7 +800,11 @@ DEADLINE_S: float = 10.0
 
 EARLY_ROUNDS: int = 3
 """Early disconnects of each kind per run: each raised BrokenPipeError or ConnectionResetError in the server in
-every trial (10 of 10), so the negative control sees at least one traceback."""
+every trial (10 of 10) when this was written."""
+
+NEGATIVE_ROUNDS: int = 30
+"""The negative control's most disconnects of each kind, stopping at the first that raises: whether a reset lands
+before the server's last write is the kernel's timing (once, in a clean CI run, none of 6 raised)."""
 
 POLL_S: float = 0.02
 """serve_forever's shutdown poll in these tests (its default 0.5 s would make each shutdown wait that long)."""
@@ -982,9 +986,12 @@ def test_early_disconnect_prints_no_traceback(sky: SkySH, capfd: pytest.CaptureF
         assert _get(srv, "/")[0] == 200
         # negative control: socketserver's own handle_error shows that each disconnect did raise in the server
         srv.handle_error = functools.partial(socketserver.BaseServer.handle_error, srv)
-        for read_first in (False, True) * EARLY_ROUNDS:
+        err = ""
+        for read_first in (False, True) * NEGATIVE_ROUNDS:  # until one disconnect raises (the kernel decides)
             _disconnect_early(srv, handled, read_first)
-        err = capfd.readouterr().err
+            err += capfd.readouterr().err
+            if "Traceback" in err:
+                break
         assert err.count("Traceback") >= 1 and ("ConnectionResetError" in err or "BrokenPipeError" in err), err
 
 
