@@ -24,6 +24,14 @@ in one run, so the ratios do not depend on the machine's speed:
     ``batched_speedup`` adds, for context, the same ratio per evaluation inside
     the batch of case 2 (not the target's measure).
 
+5.  ``curve``: the per-frame cost of one batched call of 1, 10, ..., 10^5 frames (10^6 with
+    ``--million``) at 3 and 7 bands, radiance, irradiance and lit (sun and ground), each against its
+    best per-frame cost at 10^3..10^4 frames (the ratio). Target (issue 26): ratio <= 1.5 from 100
+    frames up; below that a call's fixed cost (about 45 numpy calls, ~1 us each) is the floor, printed
+    beside it (``fixed_us``: the cost of one frame in a batch).
+6.  ``bands``: one scalar call at 1..7 bands (radiance), against the 7-band call: the scalar path is
+    bound by numpy's per-call cost, so it is nearly flat in the bands.
+
 Each for N = 7 (the file's maximum) and N = 3 (diffuse lighting). Every timing
 is the best of ``--repeats`` runs after a warm-up (:mod:`timeit`, with the loop
 count chosen so one run lasts about 0.2 s); the runtime and its baseline take
@@ -36,7 +44,9 @@ Output, one JSON object per line::
     {"bench": "single", "bands": 7, "runtime_s": ..., "baseline": "min(v @ A, np.dot(v, A)), A (112, 147)",
      "baseline_s": ..., "ratio": ..., "target": "ratio <= 3.5", "met": true}
 
-Run: ``PYTHONPATH=. python benchmarks/bench_runtime.py [--repeats 7] [--batch 100000]``.
+Run: ``PYTHONPATH=. python benchmarks/bench_runtime.py [--repeats 7] [--batch 100000] [--curve-only] [--million]``.
+The curve is timed in thread CPU time (:func:`time.thread_time`), the frames of a size evaluated in turn with
+the other sizes' (interleaved rounds, the median kept).
 """
 
 from __future__ import annotations
@@ -44,6 +54,8 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import statistics
+import time
 import timeit
 from collections.abc import Callable
 
@@ -61,6 +73,8 @@ TARGETS: dict[str, tuple[str, float]] = {
     "batch": ("<=", 2.75),
     "reference": (">=", 1e4),
     "scalar_types": ("<=", 1.3),
+    "curve": ("<=", 1.5),
+    "bands": ("<=", 1.5),
 }
 """Target per benchmark: runtime / baseline <= x, or baseline / runtime >= x (speed-up)."""
 
@@ -68,10 +82,10 @@ RUN_SECONDS: float = 0.2
 """Approximate length of one timed run; the loop count is chosen to reach it."""
 
 
-def interleaved_best(cases: dict[str, Callable[[], object]], repeats: int,
-                     run_seconds: float = RUN_SECONDS) -> dict[str, float]:
+def interleaved_best(cases: dict[str, Callable[[], object]], repeats: int, run_seconds: float = RUN_SECONDS,
+                     clock: Callable[[], float] = time.perf_counter) -> dict[str, float]:
     """:func:`_timing.interleaved_best` with this script's run length."""
-    return _timing.interleaved_best(cases, repeats, run_seconds)
+    return _timing.interleaved_best(cases, repeats, run_seconds, clock)
 
 
 def emit(bench: str, bands: int, runtime_s: float, baseline: str, baseline_s: float, **extra: object) -> None:
@@ -90,12 +104,52 @@ def emit(bench: str, bands: int, runtime_s: float, baseline: str, baseline_s: fl
     print(json.dumps(line), flush=True)
 
 
+CURVE_CASES: dict[str, dict[str, object]] = {
+    "radiance": {}, "irradiance": {"irradiance": True}, "lit": {"sun": True, "ground_albedo": 0.2}}
+"""The curve's calls: the defaults by intent of each (irradiance at 3 bands: the certified table; at 7 bands
+without deringing, whose cost per function ``benchmarks/bench_dering.py`` measures)."""
+
+CURVE_BEST: tuple[int, int] = (1000, 10_000)
+"""The sizes whose per-frame cost is each case's best (the issue's reference)."""
+
+CURVE_FRAMES: float = 2e5
+"""Frames evaluated per timed round of a size (at least one call)."""
+
+
+def curve(sky: SkySH, bands: int, case: str, sizes: list[int], repeats: int, rng: np.random.Generator) -> None:
+    """Emit the per-frame cost of each batch size (median over interleaved rounds) against the best."""
+    options = dict(CURVE_CASES[case])
+    if case == "irradiance" and bands > 3:  # deringing each 7-band function (~0.6 ms) is bench_dering.py's
+        options["dering"] = False
+    calls = {}
+    for n in sizes:
+        ts, tu, phi = rng.uniform(0.0, math.pi / 2.0, n), rng.uniform(2.5, 6.0, n), rng.uniform(-math.pi, math.pi, n)
+        calls[n] = (max(1, int(CURVE_FRAMES // n)), ts, tu, phi)
+    rounds: dict[int, list[float]] = {n: [] for n in sizes}
+    for _, ts, tu, phi in calls.values():
+        sky.coefficients(ts, tu, phi, bands=bands, **options)  # warm-up: plans, first touch
+    for _ in range(repeats):
+        for n, (number, ts, tu, phi) in calls.items():
+            start = time.thread_time()
+            for _ in range(number):
+                sky.coefficients(ts, tu, phi, bands=bands, **options)
+            rounds[n].append((time.thread_time() - start) / (number * n))
+    per_frame = {n: statistics.median(r) for n, r in rounds.items()}
+    best = min(per_frame[n] for n in CURVE_BEST if n in per_frame)
+    for n in sizes:
+        emit("curve", bands, per_frame[n], f"best per frame at {CURVE_BEST[0]}..{CURVE_BEST[1]}", best, case=case,
+             frames=n, per_frame_us=per_frame[n] * 1e6, fixed_us=per_frame[1] * 1e6 if 1 in per_frame else None,
+             in_scope=n >= 100)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[1])
     parser.add_argument("--repeats", type=int, default=7, help="timed runs per measurement (best is kept)")
     parser.add_argument("--batch", type=int, default=100_000, help="parameter sets in the batched call")
     parser.add_argument("--reference-repeats", type=int, default=3, help="timed sky_sh calls (each ~20 ms)")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--curve-only", action="store_true", help="only the batch curve and the bands (5, 6)")
+    parser.add_argument("--million", action="store_true", help="the curve up to 10^6 frames (GB-sized results)")
     args = parser.parse_args(argv)
 
     sky = SkySH.load()
@@ -104,6 +158,16 @@ def main(argv: list[str] | None = None) -> int:
                                   batch=args.batch)), flush=True)
 
     rng = np.random.default_rng(args.seed)
+    sizes = [10**k for k in range(7 if args.million else 6)]
+    for bands in BANDS:
+        for case in CURVE_CASES:
+            curve(sky, bands, case, sizes, args.repeats, rng)
+    t = interleaved_best({str(b): (lambda b=b: sky.coefficients(0.5, 3.0, 1.0, bands=b)) for b in range(1, 8)},
+                         args.repeats, clock=time.thread_time)
+    for b in range(1, 8):
+        emit("bands", b, t[str(b)], "one 1-band call", t["1"], per_call_us=t[str(b)] * 1e6)
+    if args.curve_only:
+        return 0
     ts = rng.uniform(0.0, math.pi / 2.0, args.batch)
     tu = rng.uniform(2.5, 6.0, args.batch)
     phi = rng.uniform(-math.pi, math.pi, args.batch)

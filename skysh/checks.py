@@ -102,6 +102,14 @@ def short_repr(value: Any) -> str:
 
 def as_float_array(value: ArrayLike, name: str) -> NDArray[np.float64]:
     """Return ``value`` as a float64 array; refuse NaN, inf, text, booleans, complex, objects, ragged lists."""
+    array = _float_array(value, name)
+    if not np.all(np.isfinite(array)):  # also catches float128 / uint64 values beyond float64
+        raise ValueError(f"{name} must be finite (no NaN or inf), got {short_repr(value)}")
+    return array
+
+
+def _float_array(value: ArrayLike, name: str) -> NDArray[np.float64]:
+    """:func:`as_float_array` before its finiteness check (the caller makes it)."""
     if type(value) is int:  # a Python int of any size: float() says whether it fits
         try:
             value = float(value)
@@ -114,20 +122,22 @@ def as_float_array(value: ArrayLike, name: str) -> NDArray[np.float64]:
     if raw.dtype.kind not in "iuf":  # no text, booleans, objects or complex numbers
         raise ValueError(f"{name} {_NOT_A_NUMBER}, got {short_repr(value)}")
     check_size(raw.size, name)  # before any copy: a broadcast view can be far larger than memory
-    array = np.asarray(raw, dtype=np.float64)
-    if not np.all(np.isfinite(array)):  # also catches float128 / uint64 values beyond float64
-        raise ValueError(f"{name} must be finite (no NaN or inf), got {short_repr(value)}")
-    return array
+    return np.asarray(raw, dtype=np.float64)
 
 
 def check_range(value: ArrayLike, name: str, low: float, high: float, unit: str = "") -> NDArray[np.float64]:
-    """Return ``value`` as float64 after checking it lies in the closed interval [low, high]."""
-    array = as_float_array(value, name)
-    if array.size and (array.min() < low or array.max() > high):
-        bad = array[(array < low) | (array > high)].ravel()[0]
-        suffix = f" {unit}" if unit else ""
-        raise ValueError(f"{name} must lie in [{low:g}, {high:g}]{suffix}, got {number_text(bad)}")
-    return array
+    """Return ``value`` as float64 after checking it is finite and lies in the closed interval [low, high]."""
+    array = _float_array(value, name)
+    if not array.size:
+        return array
+    smallest, largest = array.min(), array.max()  # two reductions decide it all: NaN propagates into both
+    if -math.inf < smallest and largest < math.inf and low <= smallest and largest <= high:
+        return array
+    if not np.all(np.isfinite(array)):  # the refusal's wording: as as_float_array's
+        raise ValueError(f"{name} must be finite (no NaN or inf), got {short_repr(value)}")
+    bad = array[(array < low) | (array > high)].ravel()[0]
+    suffix = f" {unit}" if unit else ""
+    raise ValueError(f"{name} must lie in [{low:g}, {high:g}]{suffix}, got {number_text(bad)}")
 
 
 def check_scalar(value: Any, name: str, low: float = -math.inf, high: float = math.inf, unit: str = "") -> float:

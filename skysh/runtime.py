@@ -79,6 +79,15 @@ __all__ = ["SkySH", "gibbs_factors"]
 _XS, _XH, _YS, _YH = SKY.x.scale, SKY.x.shift, SKY.y.scale, SKY.y.shift
 (_ZMIN, _ZMAX), (_TMIN, _TMAX) = SKY.x.interval, SKY.y.interval
 _TWO_PI: float = 2.0 * math.pi
+BATCH_CHUNK: int = 1 << 16
+"""Output values a batch evaluates at a time (512 KiB of float64, its design matrix about as large at 7 bands):
+per item, 10^6 frames cost what 10^3 do (``python benchmarks/bench_runtime.py --curve-only``)."""
+
+FEW_FRAMES: int = 32
+"""Frames up to which a batch's chunk takes its Chebyshev terms and rotation factors from one ``cos`` (as the
+scalar path) rather than by doubling and angle addition: fewer numpy calls, more cosines per frame; the two
+cross near here (``python benchmarks/bench_runtime.py --curve-only``)."""
+
 _RESOLVED_CACHE: int = 256  # resolved Options kept per SkySH (cleared when full)
 
 
@@ -391,21 +400,22 @@ class SkySH:
         return ts, t, phi, shape
 
     def _batch_sky(self, ts: NDArray, t: NDArray, phi: NDArray, shape: tuple[int, ...], plan: _Plan) -> NDArray:
-        """(shape..., rows, 3) of checked arrays: rows N * N, plus the unfiltered c_10 for a ``c10`` plan."""
+        """(shape..., rows, 3) of checked arrays: rows N * N, plus the unfiltered c_10 for a ``c10`` plan.
+
+        Evaluated in chunks of at most :data:`BATCH_CHUNK` output values into the preallocated result, so
+        the temporaries (the design matrix, the rotation factors) stay in cache whatever the batch's size."""
         rows = plan.batch_rot_index.shape[0]
         size = math.prod(shape)
         largest = max((ts.size, "sun_zenith"), (t.size, "turbidity"), (phi.size, "sun_azimuth"))[1]
         check_size(size * max(len(plan.table_flat), rows * 3), largest, f"{size:,} frames")
-        if 0 in shape:
-            return np.zeros(shape + (rows, 3))
-        ts, t, phi = (np.broadcast_to(a, shape).ravel() for a in (ts, t, phi))
-        x, y = poly.scale_unchecked(ts, t)
-        tx = poly.chebyshev_unchecked(x, plan.degrees[0])
-        ty = poly.chebyshev_unchecked(y, plan.degrees[1]) * _luminance_scale(ts, t, np)[:, None]
-        p = (tx[:, :, None] * ty[:, None, :]).reshape(ts.shape[0], -1)  # (n, T) design
-        out = (p @ plan.table_flat).reshape(-1, rows, 3)  # the one matrix product
-        out *= np.take(_rotation_factors(phi, plan.bands), plan.batch_rot_index, axis=1)[:, :, None]
-        return out.reshape(shape + (rows, 3))
+        out = np.zeros(shape + (rows, 3)) if 0 in shape else np.empty(shape + (rows, 3))
+        flat = out.reshape(size, rows * 3)
+        ts, t, phi = (a.reshape(-1) if a.shape == shape else np.broadcast_to(a, shape).ravel() for a in (ts, t, phi))
+        step = max(1, BATCH_CHUNK // (rows * 3))
+        for start in range(0, size, step):
+            part = slice(start, start + step)
+            _sky_into(ts[part], t[part], phi[part], plan, flat[part])
+        return out
 
     def _colour_matrix(self, colourspace: str) -> NDArray[np.float64]:
         matrix = self._colour_matrices.get(colourspace)
@@ -579,6 +589,28 @@ class SkySH:
         d = check_dirs(dirs, name, per_point=check_bands(bands, high=self.bands) ** 2)
         c = self.coefficients(sun_zenith, turbidity, sun_azimuth, bands, **options)
         return sh.basis_unchecked(d, int(bands)) @ c
+
+
+def _sky_into(ts: NDArray, t: NDArray, phi: NDArray, plan: _Plan, out: NDArray) -> None:
+    """One chunk of :meth:`SkySH._batch_sky` into ``out`` (n, 3 rows): the Chebyshev rows, the design matrix
+    (terms, n), the one matrix product (Habel eq. 1), the rotation (eq. 4)."""
+    n = ts.shape[0]
+    x, y = poly.scale_unchecked(ts, t)
+    if n <= FEW_FRAMES:  # T_k = cos(k acos) as the scalar path (_angle_map), m phi in one cos, one sin
+        i1, i2 = plan.split
+        acos = np.arccos(np.clip(np.stack((x, y)), -1.0, 1.0))  # rounding may pass +-1 at the ends
+        packed = np.cos(plan.angle_map[:i2, :2] @ acos)
+        tx, ty = packed[:i1], packed[i1:]
+        angles = np.multiply.outer(plan.angle_map[i2 : i2 + plan.bands, 2], np.fmod(phi, _TWO_PI))
+        rot = np.concatenate((np.cos(angles), np.sin(angles))).T  # sin(0) = 0 exactly: no m < 0 at azimuth 0
+    else:  # by doubling and angle addition: far fewer transcendental calls per frame
+        tx = poly.chebyshev_rows(x, plan.degrees[0])
+        ty = poly.chebyshev_rows(y, plan.degrees[1])
+        rot = _rotation_factors(phi, plan.bands)
+    ty *= _luminance_scale(ts, t, np)
+    design = (tx[:, None, :] * ty[None, :, :]).reshape(-1, n)  # (T, n): term-major, rows contiguous
+    np.matmul(design.T, plan.table_flat, out=out)
+    out.reshape(n, -1, 3)[...] *= np.take(rot, plan.batch_rot_index, axis=1)[:, :, None]
 
 
 def _plain_key(bands: Any, gibbs: Any, dering: Any, irradiance: Any, irradiance_table: Any, sun: Any, ground_albedo: Any,

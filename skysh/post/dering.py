@@ -475,6 +475,11 @@ def _fraction(t: NDArray, rows: _Rows, row: NDArray) -> NDArray:
     return _bisect(start, start + CERTIFIED_TOLERANCE, passes, True, CERTIFIED_TOLERANCE)
 
 
+SEARCH_CHUNK: tuple[int, int] = (16, 4096)
+"""Functions decided at a time: (certified targets, exact targets). The certificate's refinement of a sky
+near zero holds about 0.85 MB per function, the exact search about 4 kB: each chunk stays near 16 MB (a
+batch of 10^5 7-band skies held 84 GB at once and was killed)."""
+
 SUBNORMAL_EXPONENT: int = int(np.finfo(np.float64).minexp)
 """-1022: a channel whose largest |coefficient| has a binary exponent ``e <= SUBNORMAL_EXPONENT``
 (:func:`numpy.frexp`, ``max |c| < 2^-1022``) has subnormal windowed coefficients that round by
@@ -503,9 +508,20 @@ def _least_row_rounded(flat: NDArray, rows: _Rows) -> NDArray:
 
 def _search(c: NDArray, target: str, method: str) -> tuple[NDArray, NDArray, NDArray, _Rows]:
     """Checked SH c (..., K, C): the flat functions (n, K, C), each one's window position (n,) (the
-    least passing; R - 1 where none passes) and failure flag (n,), and the setting's rows."""
+    least passing; R - 1 where none passes) and failure flag (n,), and the setting's rows; decided
+    :data:`SEARCH_CHUNK` functions at a time (the certificate's refinement holds up to ~1 MB each)."""
     flat = c.reshape((-1,) + c.shape[-2:])
     rows = _rows(math.isqrt(c.shape[-2]), target)
+    step = SEARCH_CHUNK[len(rows.form_cg) > 0]
+    position, failed = np.empty(len(flat)), np.empty(len(flat), bool)
+    for start in range(0, len(flat), step):
+        part = slice(start, start + step)
+        position[part], failed[part] = _search_chunk(flat[part], rows, method)
+    return flat, position, failed, rows
+
+
+def _search_chunk(flat: NDArray, rows: _Rows, method: str) -> tuple[NDArray, NDArray]:
+    """:func:`_search` of functions (n, K, C): their positions (n,) and failure flags (n,)."""
     t, e, zero = shmin.normalised(np.swapaxes(flat, -1, -2))
     t[..., 0] += zero  # a zero channel's minimum is exactly 0: it passes, as the constant 1 does
     k = len(rows.form_cg)
@@ -522,7 +538,7 @@ def _search(c: NDArray, target: str, method: str) -> tuple[NDArray, NDArray, NDA
         if idx.size:
             position[idx] += (_fraction3(sp.take(idx), rows, first[idx]) if sp is not None
                               else _fraction(t[idx], rows, first[idx])) - 1.0
-    return flat, position, failed, rows
+    return position, failed
 
 
 def _factors(rows: _Rows, position: NDArray) -> NDArray:
