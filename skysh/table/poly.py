@@ -10,7 +10,8 @@ condition number near 1e15; see the error report's stability section).
 -   :func:`scale`: (sun zenith, turbidity) -> (x, y) in [-1, 1]^2 over the fitted domain
     (:data:`skysh.domain.SKY`, which holds the intervals and the term order).
 -   :func:`chebyshev`: T_0 .. T_d at x, by the three-term recurrence.
--   :func:`scale_unchecked`, :func:`chebyshev_unchecked`: the same for per-frame paths that checked once.
+-   :func:`scale_unchecked`, :func:`chebyshev_unchecked`: the same for per-frame paths that checked once;
+    :func:`chebyshev_rows`: the batch runtime's layout (a row per degree), built by doubling.
 -   :func:`design`: the products T_i(x) T_j(y), i <= d_theta, j <= d_tau.
 -   :func:`n_terms`: the number of terms of degrees (d_theta, d_tau).
 
@@ -27,7 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 from skysh.checks import as_float_array, check_count, check_flag, check_size
 from skysh.domain import MAX_DEGREE, SKY, check_degrees
 
-__all__ = ["scale", "scale_unchecked", "chebyshev_unchecked", "design", "n_terms"]
+__all__ = ["scale", "scale_unchecked", "chebyshev_unchecked", "chebyshev_rows", "design", "n_terms"]
 
 
 def scale(sun_zenith: ArrayLike, turbidity: ArrayLike, log_turbidity: bool = True) -> tuple[NDArray, NDArray]:
