@@ -65,20 +65,24 @@ EXPORT_PACKAGE: str = f"{PACKAGE}.export"
 """The export package: issue 24's second group (its template files are not Python and are counted apart)."""
 
 PACKAGE_BUDGETS: dict[str, int] = {
-    "skysh": 15, "skysh.__main__": 5, "skysh._version": 1, "skysh.checks": 145, "skysh.domain": 110,
+    "skysh": 15, "skysh.__main__": 5, "skysh._version": 1, "skysh.checks": 155, "skysh.domain": 110,
     "skysh.options": 90, "skysh.files": 65, "skysh.literals": 30,
-    "skysh.sh": 440, "skysh.post": 650, "skysh.model": 900, "skysh.table": 1210, "skysh.lighting": 440,
-    "skysh.runtime": 350, "skysh.engines": 395, "skysh.export": 700, "skysh.app": 1360,
+    "skysh.sh": 440, "skysh.post": 660, "skysh.model": 980, "skysh.table": 1225, "skysh.lighting": 440,
+    "skysh.runtime": 370, "skysh.engines": 395, "skysh.export": 700, "skysh.app": 1360,
 }
 """Code lines each package (a sub-package, or a module of the package's root) may hold (issue 24, item 5):
 a ceiling a change must argue with, counted in code lines so that prose is never squeezed to pay for code.
 Issue 25 raised ``skysh.post`` from 505 to 650: the least window's search (the exact fraction by tangents and
-chords, the certificate's start and gallop, ``least_window``, ``window_at``) is 136 code lines."""
+chords, the certificate's start and gallop, ``least_window``, ``window_at``) is 136 code lines. Issue 26 raised
+``skysh.runtime`` (350 to 370: chunked batches, the few-frames route), ``skysh.table`` (1210 to 1225: Chebyshev rows by
+doubling), ``skysh.checks`` (145 to 155: range checks in two reductions) and ``skysh.post`` (650 to 660: deringing
+a chunk of functions at a time); issue 27 ``skysh.model`` (900 to 980: the Hosek-Wilkie per-frame rule, 175 lines,
+with the dataset's reader shrunk by 90)."""
 
-BUDGETS: dict[str, int] = {"skysh code lines": 6700, "export code lines": 700, "skysh __all__ names": 250,
+BUDGETS: dict[str, int] = {"skysh code lines": 6850, "export code lines": 700, "skysh __all__ names": 250,
                            "import cycles": 0}
 """Issue 24's targets, printed beside the measured numbers (the total raised from 6,500 by issue 25's least
-window: 136 lines in ``skysh.post``, 33 in ``skysh.export``)."""
+window: 136 lines in ``skysh.post``, 33 in ``skysh.export``; to 6,850 by issues 26 and 27, as the packages' budgets)."""
 
 NOT_CODE: frozenset[int] = frozenset({tokenize.COMMENT, tokenize.NL, tokenize.NEWLINE, tokenize.INDENT,
                                       tokenize.DEDENT, tokenize.ENDMARKER, tokenize.ENCODING})

@@ -2,8 +2,8 @@
 """
 Measurements for fitting the Hosek-Wilkie sky's SH (issue 17): which variables and degrees.
 
-Needs the optional extra (``pip install 'skysh[hosek]'``: the model's dataset comes
-with mitsuba). Each section prints a table; the numbers quoted in
+The model's dataset ships with skysh; only ``--mitsuba`` needs the optional extra
+(``pip install 'skysh[hosek]'``). Each section prints a table; the numbers quoted in
 ``skysh/model/hosek.py``, ``tests/model/test_hosek.py`` and ``docs/hosek.md`` come from here.
 
     python tools/hosek_study.py --minima        # where the model's radiance goes negative
@@ -12,6 +12,7 @@ with mitsuba). Each section prints a table; the numbers quoted in
     python tools/hosek_study.py --fit           # per-interval (u, s, albedo) fits: degrees, errors, size
     python tools/hosek_study.py --datasets      # RGB vs spectral dataset, DC per channel
     python tools/hosek_study.py --mitsuba       # float32 agreement with Mitsuba's sunsky (needs mitsuba)
+    python tools/hosek_study.py --rule --jobs 2 # issue 27: the per-frame rule's accuracy and cost (hosek_frame)
 
 Error measure: E_mean of the Habel seed (eq. 3) over the m >= 0 coefficients of 7
 bands, worst channel, relative to L_min (skysh.table.fit.error_measures). L_min is the
@@ -45,7 +46,7 @@ sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
 
-from skysh.model import hosek, hosek_data  # noqa: E402
+from skysh.model import hosek, hosek_frame  # noqa: E402
 from skysh.sh import basis as sh  # noqa: E402
 from skysh.table import fit, poly  # noqa: E402
 from skysh.table.coefficient_file import zonal_half_layout  # noqa: E402
@@ -253,7 +254,7 @@ def section_datasets(jobs: int) -> None:
 
 
 def section_mitsuba() -> None:
-    sys.path.insert(0, str(ROOT / "tests"))
+    sys.path[:0] = [str(ROOT / "tests" / "model"), str(ROOT / "tests")]  # test_hosek, and the conftest it imports
     import mitsuba as mi
     import test_hosek as t  # the test's own comparison: the same skies, directions and budget
 
@@ -273,10 +274,118 @@ def section_mitsuba() -> None:
           f"{compare(mi, lambda ts, phi, tu, a: (ts, 0.5 * math.pi - phi, tu, a)):.1e} x the tolerance")
 
 
+# --------------------------------------------------------------------------- #
+# Issue 27: the per-frame rule (skysh.model.hosek_frame)
+# --------------------------------------------------------------------------- #
+RULE_BANDS: tuple[int, ...] = (3, 7)
+"""The band counts of issue 27's targets."""
+RULE_TARGETS: dict[int, float] = {3: 3e-5, 7: 1e-4}
+"""Issue 27's targets: worst E_mean at 3 and 7 bands, on both point sets."""
+RULE_RANDOM: int = 256
+"""Uniform random skies (sun zenith, turbidity, albedo) of the held-out set, before its corners and horizon suns."""
+
+
+def rule_sets(random: int = RULE_RANDOM, seed: int = 2027) -> dict[str, np.ndarray]:
+    """Issue 27's point sets, (P, 3) rows (sun zenith, turbidity, albedo).
+
+    "random": uniform skies, the domain's 8 corners, 8 random skies with the sun on the horizon.
+    "stress": 48 suns uniform in [80, 90] degrees; the sun exactly on and 1e-7 rad either side of every
+    panel edge of hosek_frame.ZENITH_EDGES, each at the four (turbidity, albedo) corners; the corners.
+    """
+    rng = np.random.default_rng(seed)
+    half = 0.5 * math.pi
+    corners = np.array([(z, t, a) for z in (0.0, half) for t in (1.0, 10.0) for a in (0.0, 1.0)])
+    uniform = np.column_stack([rng.uniform(0.0, half, random), rng.uniform(1.0, 10.0, random), rng.uniform(0.0, 1.0, random)])
+    horizon = np.column_stack([np.full(8, half), rng.uniform(1.0, 10.0, 8), rng.uniform(0.0, 1.0, 8)])
+    low = np.column_stack([rng.uniform(math.radians(80.0), half, 48), rng.uniform(1.0, 10.0, 48), rng.uniform(0.0, 1.0, 48)])
+    zeniths = sorted({min(max(e + d, 0.0), half) for e in hosek_frame.ZENITH_EDGES for d in (-1e-7, 0.0, 1e-7)})
+    edges = np.array([(z, t, a) for z in zeniths for t in (1.0, 10.0) for a in (0.0, 1.0)])
+    return {"random": np.concatenate([uniform, corners, horizon]), "stress": np.concatenate([low, edges, corners])}
+
+
+def _reference(point: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """The converged projection (hosek.sky_sh at its default nodes: doubling them moves it < 1e-8 of L_min) and minima."""
+    return hosek.sky_sh(*point, max(RULE_BANDS))[ROWS], hosek.sky_minimum(*point)
+
+
+def rule_reference(points: np.ndarray, jobs: int) -> tuple[np.ndarray, np.ndarray]:
+    """(P, 28, 3) m >= 0 reference coefficients and (P, 3) L_min (floored as :func:`denominator`)."""
+    rows = [tuple(float(v) for v in p) for p in points]
+    if jobs > 1:
+        with ProcessPoolExecutor(jobs) as pool:
+            results = list(pool.map(_reference, rows, chunksize=8))
+    else:
+        results = [_reference(p) for p in rows]
+    coeffs = np.stack([r[0] for r in results])
+    return coeffs, denominator(np.stack([r[1] for r in results]), coeffs)
+
+
+def rule_errors(accuracy: str | hosek_frame.Accuracy, points: np.ndarray, truth: np.ndarray, den: np.ndarray,
+                bands: int) -> np.ndarray:
+    """(P,) E_mean of hosek_frame.coefficients (batched, sun at azimuth 0) at ``bands`` against the reference."""
+    got = hosek_frame.coefficients(points[:, 0], points[:, 1], points[:, 2], bands=max(RULE_BANDS), accuracy=accuracy)
+    return fit.error_measures(got[:, ROWS], truth, den, bands)["e_mean"]
+
+
+def _best(call, repeat: int = 200) -> float:
+    """Mean time of ``repeat`` calls, seconds."""
+    start = time.perf_counter()
+    for _ in range(repeat):
+        call()
+    return (time.perf_counter() - start) / repeat
+
+
+def _call_time(accuracy: str | hosek_frame.Accuracy, bands: int = 7) -> float:
+    """Best-of-5 mean time of one scalar call (sun azimuth 0.7), seconds."""
+    return min(_best(lambda: hosek_frame.coefficients(1.0, 3.0, 0.5, 0.7, bands=bands, accuracy=accuracy))
+               for _ in range(5))
+
+
+def rule_candidates() -> dict[str, hosek_frame.Accuracy]:
+    """The offered accuracies and the variants tried: without the two ideas of issue 27, and the issue's rules."""
+    acc = hosek_frame.Accuracy
+    out: dict[str, hosek_frame.Accuracy] = dict(hosek_frame.ACCURACIES)
+    for name in ("fast", "default"):
+        a = out[name]
+        out[f"{name}, halves"] = acc(a.zenith, a.sun, a.minimum, a.azimuth, a.low_sun_azimuth, by_width=False)
+        out[f"{name}, minimum 2"] = acc(a.zenith, a.sun, 2, a.azimuth, a.low_sun_azimuth)
+        out[f"{name}, one azimuth"] = acc(a.zenith, a.sun, a.minimum, a.azimuth, a.azimuth)
+    out["issue (6,6,8,6)x20"] = acc((6, 8, 6), 6, 6, 20, 20, by_width=False)
+    out["issue (8,8,8,8)x24"] = acc((8, 8, 8), 8, 8, 24, 24, by_width=False)
+    out["issue (10,10,10,8)x24"] = acc((10, 10, 8), 10, 10, 24, 24, by_width=False)
+    return out
+
+
+def section_rule(jobs: int) -> None:
+    sets = rule_sets()
+    print("Per-frame SH of the Hosek-Wilkie sky (skysh.model.hosek_frame) against hosek.sky_sh at its default nodes:")
+    print(f"worst E_mean (m >= 0, worst channel, L_min floored as --fit) on {len(sets['random'])} random and "
+          f"{len(sets['stress'])} stress skies; targets {RULE_TARGETS[3]:.0e} (3 bands), {RULE_TARGETS[7]:.0e} (7 bands).")
+    refs = {name: rule_reference(points, jobs) for name, points in sets.items()}
+    print(f"{'rule':>24} {'rings':>5} {'az':>7} {'points':>9} {'3 random':>9} {'3 stress':>9} {'7 random':>9} "
+          f"{'7 stress':>9} {'us/call':>8}")
+    for name, accuracy in rule_candidates().items():
+        cells = [rule_errors(accuracy, sets[s], *refs[s], b).max() for b in RULE_BANDS for s in ("random", "stress")]
+        az = f"{accuracy.azimuth}/{accuracy.low_sun_azimuth}"
+        points = f"{accuracy.rings * accuracy.azimuth}/{accuracy.rings * accuracy.low_sun_azimuth}"
+        print(f"{name:>24} {accuracy.rings:5d} {az:>7} {points:>9} " + " ".join(f"{c:9.1e}" for c in cells)
+              + f" {_call_time(accuracy) * 1e6:8.0f}")
+    from skysh import SkySH
+
+    sky = SkySH.load()
+    preetham_call = min(_best(lambda: sky.coefficients(1.0, 3.0, 0.5, bands=7)) for _ in range(5))
+    print(f"Preetham table, 7 bands (SkySH.load().coefficients(1.0, 3.0, 0.5, bands=7)): {preetham_call * 1e6:.1f} us; "
+          f"default / Preetham: {_call_time('default') / preetham_call:.0f}x")
+    worst = rule_errors("default", sets["stress"], *refs["stress"], 7)
+    k = int(np.argmax(worst))
+    z, t, a = sets["stress"][k]
+    print(f"default's worst stress sky at 7 bands: sun zenith {math.degrees(z):.7f} deg, T {t:.2f}, albedo {a:.2f}")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The command line: a flag per section, and the ``--fit`` section's settings."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[1], formatter_class=argparse.RawTextHelpFormatter)
-    for name in ("minima", "albedo", "turbidity", "fit", "datasets", "mitsuba"):
+    for name in ("minima", "albedo", "turbidity", "fit", "datasets", "mitsuba", "rule"):
         parser.add_argument(f"--{name}", action="store_true", help=f"print the {name} section")
     parser.add_argument("--intervals", default="2", help="--fit: turbidity intervals k of [k, k+1] (1..9), comma-separated")
     parser.add_argument("--degrees", default="8,1,1;12,2,2;16,3,3;20,3,4;24,3,4;24,4,5",
@@ -287,11 +396,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def fit_settings(parser: argparse.ArgumentParser, args: argparse.Namespace) -> tuple[list[int], list[tuple[int, ...]]]:
-    """The dataset checked, then ``--intervals`` and ``--degrees`` parsed and checked (one line, exit 2)."""
-    try:
-        hosek_data.dataset_path()
-    except hosek_data.HosekDataError as error:
-        parser.error(str(error))
+    """``--intervals`` and ``--degrees`` parsed and checked (one line, exit 2)."""
     intervals = [int(k) for k in args.intervals.split(",")]
     candidates = [tuple(int(d) for d in triple.split(",")) for triple in args.degrees.split(";")]
     if any(not 1 <= k <= 9 for k in intervals) or any(len(c) != 3 or min(c) < 0 for c in candidates):
@@ -303,7 +408,7 @@ def main(argv: list[str] | None = None) -> None:
     parser = build_parser()
     args = parser.parse_args(argv)
     intervals, candidates = fit_settings(parser, args)
-    chosen = [n for n in ("minima", "albedo", "turbidity", "fit", "datasets", "mitsuba") if getattr(args, n)]
+    chosen = [n for n in ("minima", "albedo", "turbidity", "fit", "datasets", "mitsuba", "rule") if getattr(args, n)]
     for name in chosen or ["minima", "albedo", "turbidity", "datasets"]:
         if name == "fit":
             section_fit(intervals, candidates, args.variable, args.jobs)

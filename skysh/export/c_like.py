@@ -47,9 +47,11 @@ from :mod:`skysh.model.preetham`, never retyped):
     T_(k-2)`` (the runtime's ``cos(k acos t)``, to a few ulps).
 3.  ``acc[r][c] = sum_i sum_j T_i(x) T_j(y) TABLE[i][j][r][c]`` for every stored
     coefficient r (m >= 0, ordered ``[(l, m) for l in range(N) for m in
-    range(l + 1)]``) and channel c (R, G, B); every export stores the table r-major
-    (``SKYSH_TABLE[3 (r SKYSH_TERMS + i (SKYSH_DY + 1) + j) + c]``), so that each r is a
-    contiguous dot product. With the certified irradiance
+    range(l + 1)]``) and channel c (R, G, B). C, GLSL and HLSL store the table
+    term-major (:func:`~skysh.export.tables.term_major`: ``SKYSH_TABLE[(i (SKYSH_DY + 1) + j)
+    3 SKYSH_ROWS + 3 r + c]``), so that each term is one pass ``acc[o] += w[q] TABLE[q 3 ROWS + o]``
+    over every output o = 3 r + c, a loop compilers vectorise (``benchmarks/bench_c_floor.py``
+    measures it against a hand-written floor). With the certified irradiance
     table (3 bands; ``irradiance_table``, by intent for diffuse light, as the
     runtime: ``skysh_use_table`` in ``c_like_kernel.h``) the rows come from
     ``IRRADIANCE`` instead (its radiance-equivalent E_lm / A_l), the ground's c_10
@@ -58,7 +60,9 @@ from :mod:`skysh.model.preetham`, never retyped):
     times the luminance scale ``Y_z(ts, T) / F_Y(0, ts)`` (Preetham, cd/m^2).
 5.  Rotation about Z (Habel eq. 4) by ``phi = fmod(sun_azimuth, 2 pi)`` as the
     runtime reduces it: coefficient ``l (l + 1) + m`` is ``acc[l (l + 1) / 2 +
-    |m|]`` times ``cos(m phi)`` (m >= 0) or ``sin(|m| phi)`` (m < 0).
+    |m|]`` times ``cos(m phi)`` (m >= 0) or ``sin(|m| phi)`` (m < 0), these from one
+    ``cos`` and one ``sin`` of phi by the angle-addition recurrence (as the sun's ``cos(k ts)``,
+    ``sin(k ts)``; a few ulps from libm's at k <= 6).
 6.  Deringing, when asked (:mod:`skysh.export.dering`: the runtime's least
     window, Sloan 2017): C at every band count, GLSL and HLSL at 1..4 bands
     (5..7 need the certificate, C-only: the shaders refuse ``dering`` there).
@@ -111,7 +115,7 @@ from skysh.export import js as export_js
 from skysh.export import template
 from skysh.export.dering import dering_defines, words
 from skysh.export.lights import BY_INTENT, light_flags
-from skysh.export.tables import EnginePlan, ExportTables, engine_plan, export_tables
+from skysh.export.tables import EnginePlan, ExportTables, engine_plan, export_tables, term_major
 from skysh.literals import float32_literal, number_rows, real_literal
 from skysh.model.preetham import PEREZ_Y, ZENITH_LUMINANCE
 
@@ -164,21 +168,16 @@ def _defines(tables: ExportTables, literal: Literal, language: str) -> str:
                             | {f"SKYSH_{name}": literal(value) for name, value in numbers.items()})
 
 
-def _r_major(table: np.ndarray) -> np.ndarray:
-    """(DX + 1, DY + 1, rows, 3) as (rows, terms, 3): the layout of SKYSH_TABLE."""
-    return table.reshape(-1, table.shape[2], 3).transpose(1, 0, 2)
-
-
 def _data(tables: ExportTables, literal: Literal, language: str) -> str:
     """The data section (``c_like_data.h``) filled with the export's numbers."""
-    rows, lights = _r_major(tables.table), tables.lights
+    rows, lights = tables.table, tables.lights
     irradiance = tables.irradiance if tables.bands == 3 else None  # the certified table: 3 bands only
     if tables.bands == 1:  # the unfiltered c_10 (the ground's E_h) as row 1; with 2+ bands it is stored row 1
-        rows = np.concatenate([rows, lights.c10.reshape(1, -1, 3)])
+        rows = np.concatenate([rows, lights.c10[:, :, None, :]], axis=2)
     return template.fill(
-        "c_like_data.h", DEFINES=_defines(tables, literal, language), TABLE=_numbers(rows, literal),
+        "c_like_data.h", DEFINES=_defines(tables, literal, language), TABLE=_numbers(term_major(rows), literal),
         GIBBS=_numbers(tables.gibbs, literal), LOBE=_numbers(tables.lobe, literal), PEREZ=_numbers(PEREZ_Y, literal),
-        IRRADIANCE="" if irradiance is None else _numbers(_r_major(irradiance), literal),
+        IRRADIANCE="" if irradiance is None else _numbers(term_major(irradiance), literal),
         SUN_TABLE=_numbers(lights.sun_table, literal), SUN_RGB=_numbers(lights.rgb_from_xyz, literal),
         SUN_TRIG=_numbers(lights.windowed_trig(), literal), GROUND=_numbers(lights.ground_zonal, literal),
     )

@@ -6,6 +6,8 @@ The JavaScript and JSON exports
     precision) with the fitted tables and ``coefficients(sunZenith, turbidity,
     sunAzimuth = 0, options = {})``, the per-frame runtime for browser day-night
     cycles (``export.export_source(sky, "js")`` calls it), and ``sunLight``, ``engineLayout``.
+-   :func:`module_data`: the module's data object alone (JSON text), for code that reads the same numbers
+    (``benchmarks/js_floor.mjs``, the hand-written floor the module is timed against).
 -   :func:`declarations`, :func:`declarations_path`: the TypeScript declarations of that
     module and the file name TypeScript finds them under (``sky_sh.d.mts`` beside ``sky_sh.mjs``).
 -   :func:`json_source`: the tables and the algorithm in words, for any other language.
@@ -29,7 +31,10 @@ map), with everything static prepared at load: the table holds every band the ex
 run-time option), the Gibbs and clamped-cosine factors of every band count, and
 for every engine and band count it takes, the folded per-band factors and the
 rest of the map. A call validates, fills preallocated scratch arrays and allocates
-its result only (or none, given ``out``).
+its result only (or none, given ``out``); cos and sin of k phi (the rotation) and of k ts (the sun) come by angle
+addition from one cos and one sin each, cos(ts) is taken once, and the certified irradiance table carries the sky's
+c_10 row after its own, so that one pass sums both. ``benchmarks/bench_js_floor.py`` times a call against a
+hand-written floor doing the same arithmetic (``benchmarks/js_floor.mjs``).
 
 Options follow the Python runtime's defaults by intent: ``gibbs`` defaults to
 ``!irradiance`` and ``dering`` to ``irradiance``; ``irradianceTable`` (the runtime's
@@ -69,7 +74,7 @@ from skysh.post import dering
 from skysh.sh import basis as sh
 from skysh.sh import minimum as shmin
 
-__all__ = ["module_source", "declarations", "declarations_path", "json_source"]
+__all__ = ["module_source", "module_data", "declarations", "declarations_path", "json_source"]
 
 MODULE_TEMPLATE: str = "js_module.mjs"
 """The ES module's source (:data:`skysh.export.template.TEMPLATE_DIR`): fixed code, header words and ``{{DATA}}``."""
@@ -233,6 +238,16 @@ def module_source(sky: runtime.SkySH, bands: int | None = None) -> str:
         ENGINE_LIST=textwrap.fill(names, width=90, initial_indent=" " * 60, subsequent_indent=" *               ").strip(),
         SUN_ZENITH_DOMAIN=interval_text(*tables.sun_zenith_domain, pi=True),
     )
+
+
+def module_data(sky: runtime.SkySH, bands: int | None = None) -> str:
+    """
+    The data object ``DATA`` that :func:`module_source` with the same arguments embeds, as JSON text (also a
+    JavaScript literal): its keys and layouts are those ``js_module.mjs`` documents above ``const DATA``.
+
+    Raises a ValueError for ``bands`` out of range.
+    """
+    return _data_text(_module_data(export_tables(sky, sky.bands if bands is None else bands)))
 
 
 def declarations(sky: runtime.SkySH, bands: int | None = None) -> str:

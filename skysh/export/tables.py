@@ -13,6 +13,8 @@ Every language of :mod:`skysh.export.c_like` (C, GLSL, HLSL) and of :mod:`skysh.
     folded before it, the rest after it), for every export that takes an engine (its
     nonzero terms, :meth:`EnginePlan.terms`, are the exports' index-and-factor tables);
     :data:`ENGINE_ZERO`, :data:`ENGINE_UNIT`: the rounding it snaps to 0 and +-1.
+-   :func:`term_major`: a sky table as the compiled exports lay it out, one row of outputs per
+    Chebyshev term (a vectorisable pass each).
 """
 
 from __future__ import annotations
@@ -107,6 +109,26 @@ ENGINE_UNIT: float = 1e-14
 (the engines' maps are signs, axis permutations, exact 90-degree rotations and band
 constants, built numerically): they are snapped to exact +-1 factors, changing an output by
 at most this relative amount."""
+
+
+
+def term_major(table: NDArray[np.float64]) -> NDArray[np.float64]:
+    """
+    A sky table laid out term-major, as C, GLSL and HLSL store ``SKYSH_TABLE`` and ``SKYSH_IRRADIANCE``.
+
+    Parameters
+    ----------
+    table
+        (DX + 1, DY + 1, rows, 3): the Chebyshev coefficient of T_i(x) T_j(y) for stored row r, channel c
+        (:attr:`ExportTables.table`, :attr:`ExportTables.irradiance`).
+
+    Returns
+    -------
+    numpy.ndarray
+        (terms, 3 rows): entry [q, o] is term q = i (DY + 1) + j of output o = 3 r + c, so that a
+        kernel forms every output as ``acc[o] += w[q] T[q, o]``, one contiguous pass per term.
+    """
+    return np.ascontiguousarray(table).reshape(table.shape[0] * table.shape[1], -1)
 
 
 @dataclass(frozen=True)

@@ -16,6 +16,10 @@ The Hosek-Wilkie (2012) sky and its reference SH projection
 -   :func:`sky_quadrature_rule`, :func:`sky_sh`: the reference ("truth") SH projection.
 -   :func:`horizontal_irradiance`, :func:`sky_minimum`: E_h of the sky and its minimum.
 
+The per-frame projection (the exact model on a small sun-adapted rule) is
+:func:`skysh.model.hosek_frame.coefficients`; the dataset ships with skysh
+(:mod:`skysh.model.hosek_data`).
+
 The model (paper, eq. 9 and section 5), per channel c (an RGB primary or one of 11
 wavelengths, 320..720 nm)::
 
@@ -195,7 +199,7 @@ def configuration(sun_zenith: ArrayLike, turbidity: ArrayLike, albedo: ArrayLike
     Raises
     ------
     HosekDataError
-        Without the ``hosek`` extra (mitsuba's dataset file).
+        The dataset shipped with skysh (:mod:`skysh.model.hosek_data`) is missing or damaged.
     """
     check_choice(dataset, "dataset", tuple(_DATA_KEYS))
     return _configuration(*_check_sun(sun_zenith, turbidity, albedo), dataset)
@@ -203,7 +207,7 @@ def configuration(sun_zenith: ArrayLike, turbidity: ArrayLike, albedo: ArrayLike
 
 def _configuration(ts: NDArray, t: NDArray, a: NDArray, dataset: str) -> tuple[NDArray, NDArray]:
     """:func:`configuration` of checked inputs; the dataset's tensors are read once per process
-    (HosekDataError without the extra)."""
+    (HosekDataError if the shipped file is missing)."""
     params, mean = (hosek_data.sky_tensors()[key] for key in _DATA_KEYS[dataset])
     return _interpolate(params, ts, t, a), _interpolate(mean, ts, t, a)
 

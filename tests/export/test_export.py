@@ -190,18 +190,18 @@ def evaluate_tables(
 
 def parse_shader_table(source: str, name: str = "SKYSH_TABLE") -> np.ndarray:
     """The numbers of an RGB table (SKYSH_TABLE, SKYSH_IRRADIANCE) of a GLSL or HLSL export, (n, 3) float32, in its
-    order: r-major, [3 (r SKYSH_TERMS + i (SKYSH_DY + 1) + j) + c] (skysh/export/templates/c_like_data.h)."""
+    order: term-major, [(i (SKYSH_DY + 1) + j) 3 rows + 3 r + c] (skysh/export/templates/c_like_data.h)."""
     return parse_table(source, name).reshape(-1, 3)
 
 
 def terms_major(rows: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
-    """An r-major table as the exports store it, (rows x terms, 3), as ``shape`` (DX + 1, DY + 1, rows, 3)."""
-    return rows.reshape(shape[2], shape[0], shape[1], 3).transpose(1, 2, 0, 3)
+    """A table as the exports store it (term-major), (terms x rows, 3), as ``shape`` (DX + 1, DY + 1, rows, 3)."""
+    return rows.reshape(shape[0], shape[1], shape[2], 3)
 
 
-def r_major(table: np.ndarray) -> np.ndarray:
-    """(DX + 1, DY + 1, rows, 3) in the exports' order, (rows x terms, 3): the inverse of :func:`terms_major`."""
-    return table.reshape(-1, table.shape[2], 3).transpose(1, 0, 2).reshape(-1, 3)
+def as_stored(table: np.ndarray) -> np.ndarray:
+    """(DX + 1, DY + 1, rows, 3) in the exports' order, (terms x rows, 3): the inverse of :func:`terms_major`."""
+    return table.reshape(-1, 3)
 
 
 def shader_float32_table_error(sky: SkySH, source: str, bands: int) -> float:
@@ -296,7 +296,7 @@ def choice_shader(source: str, version: str, engine: str | None) -> str:
 
 def turned_the_other_way(source: str) -> str:
     """The C header ``source`` with its rotation (Habel eq. 4) turning the other way (a negative control)."""
-    return source.replace("SKYSH_REAL rot = m < 0 ? SKYSH_SIN(", "SKYSH_REAL rot = m < 0 ? -SKYSH_SIN(")
+    return source.replace("SKYSH_REAL rot = m < 0 ? rs[k] : rc[k];", "SKYSH_REAL rot = m < 0 ? -rs[k] : rc[k];")
 
 
 def c_jobs(exported: Exported, wanted: set[str]) -> Iterator[Job]:
@@ -755,7 +755,7 @@ class TestShaderExport:
         if bands == 1:
             stored = np.concatenate([stored, tables.lights.c10[:, :, None, :]], axis=2)
         assert table.shape == (stored[..., 0].size, 3)
-        np.testing.assert_array_equal(table, r_major(stored).astype(np.float32))  # exact float32 round trip
+        np.testing.assert_array_equal(table, as_stored(stored).astype(np.float32))  # exact float32 round trip
         for open_, close in ("()", "{}", "[]"):
             assert source.count(open_) == source.count(close)
         assert f"#define SKYSH_COUNT {bands * bands}" in source
@@ -801,7 +801,7 @@ class TestShaderIrradianceTable:
     def test_round_trip_and_presence(self, sky: SkySH, exported: Exported, language: str) -> None:
         source = exported(language, bands=3)
         table = parse_shader_table(source, "SKYSH_IRRADIANCE")
-        np.testing.assert_array_equal(table, r_major(export_tables(sky, 3).irradiance).astype(np.float32))
+        np.testing.assert_array_equal(table, as_stored(export_tables(sky, 3).irradiance).astype(np.float32))
         assert "#define SKYSH_IRRADIANCE_TABLE 1" in source
         for bands in (1, 7):  # no table: irradianceTable 1 is refused, by intent is the sky's pipeline
             other = exported(language, bands=bands)  # (its declaration, empty, is skipped by #if SKYSH_IRRADIANCE_TABLE)

@@ -139,8 +139,8 @@ class Small:
         """Steps 2 to 5 and the per-band factor ``band``: (9, 3)."""
         x = min(1.0, max(-1.0, ts * self.number("X_SCALE") - self.number("X_SHIFT")))
         y = min(1.0, max(-1.0, math.log(t) * self.number("Y_SCALE") - self.number("Y_SHIFT")))
-        rows = self.tables["SKYSH_IRRADIANCE" if table else "SKYSH_TABLE"].reshape(6, 4, 3)
-        acc = np.einsum("q,rqc->rc", np.outer([1.0, x], [1.0, y]).ravel(), rows)  # term q = i (DY + 1) + j
+        rows = self.tables["SKYSH_IRRADIANCE" if table else "SKYSH_TABLE"].reshape(4, 6, 3)  # term-major
+        acc = np.einsum("q,qrc->rc", np.outer([1.0, x], [1.0, y]).ravel(), rows)  # term q = i (DY + 1) + j
         scale = float(preetham.luminance_scale(ts, t))
         out = np.zeros((9, 3))
         for l in range(3):

@@ -1,14 +1,15 @@
 """
-Tests of :mod:`skysh.model.hosek` and its dataset reader :mod:`skysh.model.hosek_data`
-=============================================================================
+Tests of :mod:`skysh.model.hosek` and its shipped dataset :mod:`skysh.model.hosek_data`
+=======================================================================================
 
 References independent of skysh: Mitsuba 3's own ``sunsky`` emitter (scalar_rgb
-and scalar_spectral variants, CPU) and its own tensor-file reader
+and scalar_spectral variants, CPU), its dataset file and its own tensor-file reader
 (``mitsuba/python/tensor_io.py``, loaded from its file); scipy's adaptive
 quadrature for the SH projection; scipy again for the spectral -> XYZ weights.
-The reference tests need the optional extra (``pip install skysh[hosek]``:
-mitsuba 3.9.1, drjit 1.5.0) and are skipped without it, saying so; mitsuba is
-imported only inside the fixtures that use it.
+The model runs on the dataset skysh ships; only the comparisons with Mitsuba (its
+emitter, its file and ``tools/hosek_extract.py`` reading it) need the optional extra
+(``pip install 'skysh[hosek]'``: mitsuba 3.9.1, drjit 1.5.0) and skip without it,
+saying so; mitsuba is imported only inside the fixtures that use it.
 
 Every tolerance is a named constant with the reason for its size.
 """
@@ -23,6 +24,7 @@ import sys
 
 import numpy as np
 import pytest
+from conftest import TOOLS, load_script
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import integrate
@@ -31,13 +33,16 @@ from skysh.model import hosek, hosek_data, preetham
 from skysh.model.ground import ground_sh, horizontal_irradiance_from_sh
 from skysh.sh import basis as sh
 
-try:
-    DATASET = hosek_data.dataset_path()
-except hosek_data.HosekDataError:
-    DATASET = None
+extract = load_script(TOOLS / "hosek_extract.py", "hosek_extract_under_test")
+"""``tools/hosek_extract.py``: Mitsuba's tensor-file reader and the extraction of the shipped dataset."""
 
-pytestmark = pytest.mark.skipif(
-    DATASET is None, reason="the Hosek-Wilkie dataset needs the optional extra: pip install 'skysh[hosek]'"
+try:
+    MITSUBA_FILE = extract.dataset_path()
+except extract.ExtractError:
+    MITSUBA_FILE = None
+
+needs_mitsuba_file = pytest.mark.skipif(
+    MITSUBA_FILE is None, reason="comparing with mitsuba's dataset file needs the optional extra: pip install 'skysh[hosek]'"
 )
 
 EPS32: float = float(np.finfo(np.float32).eps)
@@ -184,17 +189,19 @@ def _mitsuba_eval(mi, sky: tuple[float, float, float, float], dirs: np.ndarray, 
 # --------------------------------------------------------------------------- #
 # The reader
 # --------------------------------------------------------------------------- #
-class TestReader:
-    def test_matches_mitsubas_own_reader(self, capsys):
-        spec = importlib.util.spec_from_file_location("tensor_io", DATASET.parents[2] / "python" / "tensor_io.py")
-        module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)  # Mitsuba's pure-Python reader, without importing mitsuba
-        theirs = module.read(str(DATASET))
-        ours = hosek_data.read_tensor_file(DATASET)
-        assert sorted(ours) == sorted(theirs)
-        for name, array in theirs.items():
-            assert ours[name].dtype == array.dtype and ours[name].shape == array.shape
-            np.testing.assert_array_equal(ours[name], array)
+class TestShippedDataset:
+    @needs_mitsuba_file
+    def test_identical_to_mitsubas_file(self):
+        theirs = extract.read_tensor_file(MITSUBA_FILE)
+        ours = hosek_data.sky_tensors()
+        for name in hosek_data.SKY_TENSOR_SHAPES:
+            assert ours[name].dtype == theirs[name].dtype and ours[name].shape == theirs[name].shape
+            np.testing.assert_array_equal(ours[name], theirs[name])  # bit for bit
+
+    @needs_mitsuba_file
+    def test_extract_check_passes(self, capsys):
+        assert extract.main(["--check"]) == 0
+        assert "match" in capsys.readouterr().out
 
     def test_documented_shapes(self):
         tensors = hosek_data.sky_tensors()
@@ -202,22 +209,56 @@ class TestReader:
             assert tensors[name].shape == shape and tensors[name].dtype == np.float64
             assert not tensors[name].flags.writeable
 
-    def test_pinned_file(self):
+    def test_provenance_and_license(self):
         info = hosek_data.dataset_info()
-        if info["mitsuba_version"] != hosek_data.MITSUBA_VERSION:
-            pytest.skip(f"mitsuba {info['mitsuba_version']} installed, the pin is {hosek_data.MITSUBA_VERSION}")
-        assert info["pinned"] and "Lukas Hosek and Alexander Wilkie" in info["license"]
+        assert info["sha256"] == hosek_data.PINNED_SHA256 and info["mitsuba_version"] == hosek_data.MITSUBA_VERSION
+        assert "Lukas Hosek and Alexander Wilkie" in info["license"] and hosek_data.PINNED_SHA256 in info["license"]
+        if MITSUBA_FILE is not None:  # Mitsuba's LICENSE, verbatim
+            assert (MITSUBA_FILE.parent / "LICENSE").read_text(encoding="utf-8") in info["license"]
 
-    def test_found_without_importing_mitsuba(self):
-        code = ("import sys; from skysh.model import hosek; hosek.configuration(0.5, 3.0, 0.3); "
-                "assert 'mitsuba' not in sys.modules and 'drjit' not in sys.modules, sorted(sys.modules)")
+    def test_works_without_mitsuba(self):
+        code = ("import sys; sys.modules['mitsuba'] = sys.modules['drjit'] = None; from skysh.model import hosek; "
+                "hosek.configuration(0.5, 3.0, 0.3); assert sys.modules['mitsuba'] is None")
         subprocess.run([sys.executable, "-c", code], check=True, timeout=120)
 
-    def test_missing_extra_names_the_install(self, monkeypatch):
-        monkeypatch.setattr(hosek_data, "_candidates", list)
+    def test_missing_or_foreign_file_refused(self, monkeypatch, tmp_path):
+        tensors = dict(hosek_data.sky_tensors())
         monkeypatch.setattr(hosek_data, "_CACHE", {})
-        with pytest.raises(hosek_data.HosekDataError, match=r"pip install 'skysh\[hosek\]'"):
+        monkeypatch.setattr(hosek_data, "DATA_PATH", tmp_path / "none.npz")
+        with pytest.raises(hosek_data.HosekDataError, match="missing"):
             hosek.radiance([0.0, 0.0, 1.0], 0.5, 0.0, 3.0, 0.3)
+        foreign = tmp_path / "foreign.npz"
+        np.savez(foreign, source_sha256=np.array("0" * 64), **tensors)
+        monkeypatch.setattr(hosek_data, "DATA_PATH", foreign)
+        monkeypatch.setattr(hosek_data, "_CACHE", {})
+        with pytest.raises(hosek_data.HosekDataError, match="pinned"):
+            hosek_data.sky_tensors()
+        short = tmp_path / "short.npz"
+        np.savez(short, source_sha256=np.array(hosek_data.PINNED_SHA256), sky_params_rgb=np.zeros((10, 2, 6, 3)))
+        monkeypatch.setattr(hosek_data, "DATA_PATH", short)
+        monkeypatch.setattr(hosek_data, "_CACHE", {})
+        with pytest.raises(hosek_data.HosekDataError, match="sky_params_rgb"):
+            hosek_data.sky_tensors()
+
+
+@needs_mitsuba_file
+class TestExtractTool:
+    def test_matches_mitsubas_own_reader(self):
+        spec = importlib.util.spec_from_file_location("tensor_io", MITSUBA_FILE.parents[2] / "python" / "tensor_io.py")
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)  # Mitsuba's pure-Python reader, without importing mitsuba
+        theirs = module.read(str(MITSUBA_FILE))
+        ours = extract.read_tensor_file(MITSUBA_FILE)
+        assert sorted(ours) == sorted(theirs)
+        for name, array in theirs.items():
+            assert ours[name].dtype == array.dtype and ours[name].shape == array.shape
+            np.testing.assert_array_equal(ours[name], array)
+
+    def test_wrong_hash_refused(self, tmp_path):
+        path = tmp_path / "sunsky_datasets.bin"
+        path.write_bytes(MITSUBA_FILE.read_bytes() + b"\0")
+        with pytest.raises(extract.ExtractError, match="not the pinned"):
+            extract.extract(path)
 
     @pytest.mark.parametrize("edit, message", [
         (lambda b: b"tensor_filX\x00" + b[12:], "not a Mitsuba tensor file"),
@@ -228,9 +269,9 @@ class TestReader:
     ])
     def test_corrupt_files_refused(self, tmp_path, edit, message):
         path = tmp_path / "bad.bin"
-        path.write_bytes(edit(DATASET.read_bytes()))
-        with pytest.raises(hosek_data.HosekDataError, match=message):
-            hosek_data.read_tensor_file(path)
+        path.write_bytes(edit(MITSUBA_FILE.read_bytes()))
+        with pytest.raises(extract.ExtractError, match=message):
+            extract.read_tensor_file(path)
 
 
 # --------------------------------------------------------------------------- #

@@ -24,9 +24,10 @@
 {{DEFINES}}
 #define SKYSH_TERMS ((SKYSH_DX + 1) * (SKYSH_DY + 1))
 
-/* [3 (r SKYSH_TERMS + i (SKYSH_DY + 1) + j) + c]: the coefficient of T_i(x) T_j(y) for stored coefficient r
+/* [(i (SKYSH_DY + 1) + j) 3 SKYSH_ROWS + 3 r + c]: the coefficient of T_i(x) T_j(y) for stored coefficient r
  * (l = 0, 1, 1, 2, 2, 2, ... with m = 0 .. l; one band: r = 1 is the unfiltered c_10) and channel c (R, G, B),
- * over the luminance scale: the terms of one stored coefficient are contiguous. */
+ * over the luminance scale: term-major, the 3 SKYSH_ROWS outputs of one term contiguous (one vectorisable pass
+ * a term in c_like_kernel.h's skysh_rows; a shader that moves it to a buffer keeps this layout). */
 SKYSH_CONST SKYSH_REAL SKYSH_TABLE[SKYSH_ROWS * SKYSH_TERMS * 3] = SKYSH_ARRAY(SKYSH_REAL, SKYSH_ROWS * SKYSH_TERMS * 3)
     {{TABLE}}
 SKYSH_END;
@@ -41,8 +42,8 @@ SKYSH_CONST SKYSH_REAL SKYSH_PEREZ_Y[10] = SKYSH_ARRAY(SKYSH_REAL, 10)
 SKYSH_END;
 
 #if SKYSH_IRRADIANCE_TABLE
-/* [3 (r SKYSH_TERMS + i (SKYSH_DY + 1) + j) + c]: the certified irradiance table, E_lm / A_l of the
- * m >= 0 rows over the luminance scale (docs/irradiance.md), laid out as SKYSH_TABLE. */
+/* [(i (SKYSH_DY + 1) + j) 3 SKYSH_HALF + 3 r + c]: the certified irradiance table, E_lm / A_l of the
+ * m >= 0 rows over the luminance scale (docs/irradiance.md), term-major as SKYSH_TABLE. */
 SKYSH_CONST SKYSH_REAL SKYSH_IRRADIANCE[SKYSH_HALF * SKYSH_TERMS * 3] = SKYSH_ARRAY(SKYSH_REAL, SKYSH_HALF * SKYSH_TERMS * 3)
     {{IRRADIANCE}}
 SKYSH_END;

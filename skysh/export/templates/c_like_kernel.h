@@ -7,9 +7,11 @@
  *  1. refuse a frame outside the domain (C: -1 .. -5, the shaders: false; the output zeroed);
  *  2. x and y of the sun zenith and the log turbidity, their Chebyshev polynomials;
  *  3. each stored (m >= 0) coefficient as a sum over the terms T_i(x) T_j(y) of SKYSH_TABLE (Habel
- *     eq. 1), or of the certified irradiance table SKYSH_IRRADIANCE;
+ *     eq. 1), or of the certified irradiance table SKYSH_IRRADIANCE: the tables are term-major, one pass
+ *     over every output of a term at a time (skysh_rows), which compilers vectorise;
  *  4. the Gibbs filter and the luminance scale Y_z / F_Y(0, ts) (Preetham 1999);
- *  5. the rotation about Z by the sun's azimuth (Habel eq. 4);
+ *  5. the rotation about Z by the sun's azimuth (Habel eq. 4): cos(m phi) and sin(m phi) from one cos
+ *     and one sin of phi by the angle addition (skysh_turns), shared with the sun;
  *  6. the deringing (c_like_dering3.h; C at 5..7 bands: c_like_dering_certificate_c.h);
  *  7. the sun and the ground;
  *  8. the per-band factor (the clamped cosine A_l, or an engine's folded factor);
@@ -22,12 +24,13 @@
  * c_like_api_shader.glsl.
  */
 
-/* Y_z / F_Y(0, ts): the sky's luminance scale, cd/m^2 (Preetham 1999, appendix). */
-SKYSH_FN SKYSH_REAL skysh_luminance_scale(SKYSH_REAL ts, SKYSH_REAL t)
+#define SKYSH_OUTPUTS (3 * SKYSH_ROWS) /* the outputs of one term of SKYSH_TABLE: channel c of stored row r is 3 r + c */
+
+/* Y_z / F_Y(0, ts): the sky's luminance scale, cd/m^2 (Preetham 1999, appendix); ct = cos(ts), the caller's. */
+SKYSH_FN SKYSH_REAL skysh_luminance_scale(SKYSH_REAL ts, SKYSH_REAL ct, SKYSH_REAL t)
 {
     SKYSH_REAL chi = (SKYSH_ZENITH_CHI - t / 120.0f) * (SKYSH_PI - 2.0f * ts);
     SKYSH_REAL yz = 1000.0f * ((SKYSH_ZENITH_A * t - SKYSH_ZENITH_B) * SKYSH_TAN(chi) - SKYSH_ZENITH_C * t + SKYSH_ZENITH_D);
-    SKYSH_REAL ct = SKYSH_COS(ts);
     SKYSH_REAL f = (1.0f + (SKYSH_PEREZ_Y[0] * t + SKYSH_PEREZ_Y[1]) * SKYSH_EXP(SKYSH_PEREZ_Y[2] * t + SKYSH_PEREZ_Y[3]))
         * (1.0f + (SKYSH_PEREZ_Y[4] * t + SKYSH_PEREZ_Y[5]) * SKYSH_EXP((SKYSH_PEREZ_Y[6] * t + SKYSH_PEREZ_Y[7]) * ts)
            + (SKYSH_PEREZ_Y[8] * t + SKYSH_PEREZ_Y[9]) * ct * ct);
@@ -60,51 +63,84 @@ SKYSH_FN SKYSH_REAL skysh_band_factor(int mode, int l)
     return mode == 1 ? SKYSH_LOBE[l] : 1.0f;
 }
 
-/* Entry k of the sky's SKYSH_TABLE (irradiance 0) or of the certified SKYSH_IRRADIANCE (1; 0 in an export without it). */
-SKYSH_FN SKYSH_REAL skysh_entry(int irradiance, int k)
+/*
+ * cos(k a) and sin(k a), k = 0 .. SKYSH_BANDS - 1, from ca = cos(a) and sa = sin(a) by the angle addition
+ * cos((k + 1) a) = cos(k a) ca - sin(k a) sa, sin((k + 1) a) = sin(k a) ca + cos(k a) sa: one cos and one sin
+ * for every k (about an ulp more error a step; tests/export/test_export_kernel.py bounds it against libm).
+ */
+SKYSH_FN void skysh_turns(SKYSH_REAL ca, SKYSH_REAL sa, SKYSH_OUT SKYSH_REAL c[SKYSH_BANDS], SKYSH_OUT SKYSH_REAL s[SKYSH_BANDS])
 {
-#if SKYSH_IRRADIANCE_TABLE
-    return irradiance == 1 ? SKYSH_IRRADIANCE[k] : SKYSH_TABLE[k];
-#else
-    return irradiance == 1 ? 0.0f : SKYSH_TABLE[k];
-#endif
+    c[0] = 1.0f;
+    s[0] = 0.0f;
+    for (int k = 1; k < SKYSH_BANDS; ++k) {
+        c[k] = c[k - 1] * ca - s[k - 1] * sa;
+        s[k] = s[k - 1] * ca + c[k - 1] * sa;
+    }
 }
 
 /*
- * Habel eq. (1) for stored coefficient r: acc[c] = sum_q w[q] T[3 (r SKYSH_TERMS + q) + c] (T: skysh_entry's),
- * as six independent sums, the even and the odd q of each channel (latency), added at the end.
+ * Habel eq. (1) for every stored coefficient at once: acc[o] = sum_q w[q] SKYSH_TABLE[q SKYSH_OUTPUTS + o], output
+ * o = 3 r + c. The table is term-major, so each pass over the outputs (a loop compilers vectorise) adds eight
+ * terms, reading and writing the sums once for eight (benchmarks/bench_c_floor.py).
  */
-SKYSH_FN void skysh_row(int irradiance, int r, SKYSH_IN SKYSH_REAL w[SKYSH_TERMS], SKYSH_OUT SKYSH_RGB(acc))
+SKYSH_FN void skysh_rows(SKYSH_IN SKYSH_REAL w[SKYSH_TERMS], SKYSH_OUT SKYSH_REAL acc[SKYSH_OUTPUTS])
 {
-    SKYSH_REAL r0 = 0.0f, g0 = 0.0f, b0 = 0.0f, r1 = 0.0f, g1 = 0.0f, b1 = 0.0f;
-    int q = 0;
-    for (; q + 1 < SKYSH_TERMS; q += 2) {
-        int k = 3 * (r * SKYSH_TERMS + q);
-        r0 += w[q] * skysh_entry(irradiance, k);
-        g0 += w[q] * skysh_entry(irradiance, k + 1);
-        b0 += w[q] * skysh_entry(irradiance, k + 2);
-        r1 += w[q + 1] * skysh_entry(irradiance, k + 3);
-        g1 += w[q + 1] * skysh_entry(irradiance, k + 4);
-        b1 += w[q + 1] * skysh_entry(irradiance, k + 5);
-    }
-    if (q < SKYSH_TERMS) {
-        int k = 3 * (r * SKYSH_TERMS + q);
-        r0 += w[q] * skysh_entry(irradiance, k);
-        g0 += w[q] * skysh_entry(irradiance, k + 1);
-        b0 += w[q] * skysh_entry(irradiance, k + 2);
-    }
-    acc[0] = r0 + r1;
-    acc[1] = g0 + g1;
-    acc[2] = b0 + b1;
+    for (int o = 0; o < SKYSH_OUTPUTS; ++o)
+        acc[o] = 0.0f;
+    for (int q = 0; q < SKYSH_TERMS - SKYSH_TERMS % 8; q += 8)
+        for (int o = 0; o < SKYSH_OUTPUTS; ++o) {
+            int k = q * SKYSH_OUTPUTS + o;
+            acc[o] += w[q] * SKYSH_TABLE[k] + w[q + 1] * SKYSH_TABLE[k + SKYSH_OUTPUTS] + w[q + 2] * SKYSH_TABLE[k + 2 * SKYSH_OUTPUTS]
+                + w[q + 3] * SKYSH_TABLE[k + 3 * SKYSH_OUTPUTS] + w[q + 4] * SKYSH_TABLE[k + 4 * SKYSH_OUTPUTS]
+                + w[q + 5] * SKYSH_TABLE[k + 5 * SKYSH_OUTPUTS] + w[q + 6] * SKYSH_TABLE[k + 6 * SKYSH_OUTPUTS]
+                + w[q + 7] * SKYSH_TABLE[k + 7 * SKYSH_OUTPUTS];
+        }
+    for (int q = SKYSH_TERMS - SKYSH_TERMS % 8; q < SKYSH_TERMS; ++q) /* the last terms, if any */
+        for (int o = 0; o < SKYSH_OUTPUTS; ++o)
+            acc[o] += w[q] * SKYSH_TABLE[q * SKYSH_OUTPUTS + o];
 }
 
-/* The sun's RGB direct normal illuminance (lux; Preetham 1999 appendix, fitted: skysh.lighting.sunlight). */
-SKYSH_FN void skysh_sun_rgb(SKYSH_REAL ts, SKYSH_REAL t, SKYSH_OUT SKYSH_RGB(rgb))
+/*
+ * The unfiltered sky's c_10 alone (stored row 1 of SKYSH_TABLE, the ground's E_h) into acc[3 .. 5] where the rows
+ * come from the certified table; zeros without a ground, which alone reads it.
+ */
+SKYSH_FN void skysh_c10(SKYSH_BOOL ground, SKYSH_IN SKYSH_REAL w[SKYSH_TERMS], SKYSH_INOUT SKYSH_REAL acc[SKYSH_OUTPUTS])
+{
+    for (int c = 0; c < 3; ++c)
+        acc[3 + c] = 0.0f;
+    if (ground)
+        for (int q = 0; q < SKYSH_TERMS; ++q)
+            for (int c = 0; c < 3; ++c)
+                acc[3 + c] += w[q] * SKYSH_TABLE[q * SKYSH_OUTPUTS + 3 + c];
+}
+
+#if SKYSH_IRRADIANCE_TABLE
+/* skysh_rows over the certified irradiance table (3 bands, where its SKYSH_HALF rows are all SKYSH_ROWS). */
+SKYSH_FN void skysh_table_rows(SKYSH_IN SKYSH_REAL w[SKYSH_TERMS], SKYSH_OUT SKYSH_REAL acc[SKYSH_OUTPUTS])
+{
+    for (int o = 0; o < SKYSH_OUTPUTS; ++o)
+        acc[o] = 0.0f;
+    for (int q = 0; q < SKYSH_TERMS - SKYSH_TERMS % 8; q += 8)
+        for (int o = 0; o < SKYSH_OUTPUTS; ++o) {
+            int k = q * SKYSH_OUTPUTS + o;
+            acc[o] += w[q] * SKYSH_IRRADIANCE[k] + w[q + 1] * SKYSH_IRRADIANCE[k + SKYSH_OUTPUTS] + w[q + 2] * SKYSH_IRRADIANCE[k + 2 * SKYSH_OUTPUTS]
+                + w[q + 3] * SKYSH_IRRADIANCE[k + 3 * SKYSH_OUTPUTS] + w[q + 4] * SKYSH_IRRADIANCE[k + 4 * SKYSH_OUTPUTS]
+                + w[q + 5] * SKYSH_IRRADIANCE[k + 5 * SKYSH_OUTPUTS] + w[q + 6] * SKYSH_IRRADIANCE[k + 6 * SKYSH_OUTPUTS]
+                + w[q + 7] * SKYSH_IRRADIANCE[k + 7 * SKYSH_OUTPUTS];
+        }
+    for (int q = SKYSH_TERMS - SKYSH_TERMS % 8; q < SKYSH_TERMS; ++q) /* the last terms, if any */
+        for (int o = 0; o < SKYSH_OUTPUTS; ++o)
+            acc[o] += w[q] * SKYSH_IRRADIANCE[q * SKYSH_OUTPUTS + o];
+}
+#endif
+
+/* The sun's RGB direct normal illuminance (lux; Preetham 1999 appendix, fitted: skysh.lighting.sunlight); ct = cos(ts). */
+SKYSH_FN void skysh_sun_rgb(SKYSH_REAL ts, SKYSH_REAL ct, SKYSH_REAL t, SKYSH_OUT SKYSH_RGB(rgb))
 {
     SKYSH_REAL sx[SKYSH_SUN_DX + 1];
     SKYSH_REAL sy[SKYSH_SUN_DY + 1];
     SKYSH_REAL ln[3];
-    SKYSH_REAL m = 1.0f / (SKYSH_COS(ts) + SKYSH_KASTEN_A * SKYSH_POW(SKYSH_KASTEN_B - ts * SKYSH_DEG, SKYSH_KASTEN_NEG_C));
+    SKYSH_REAL m = 1.0f / (ct + SKYSH_KASTEN_A * SKYSH_POW(SKYSH_KASTEN_B - ts * SKYSH_DEG, SKYSH_KASTEN_NEG_C));
     SKYSH_REAL x = (m - SKYSH_SUN_M0) * SKYSH_SUN_X_SCALE - 1.0f; /* m: Kasten's (1966) air mass */
     SKYSH_REAL y = (t - SKYSH_SUN_TMIN) * SKYSH_SUN_Y_SCALE - 1.0f;
     x = x < -1.0f ? -1.0f : (x > 1.0f ? 1.0f : x);
@@ -115,17 +151,20 @@ SKYSH_FN void skysh_sun_rgb(SKYSH_REAL ts, SKYSH_REAL t, SKYSH_OUT SKYSH_RGB(rgb
         sx[i] = i == 1 ? x : 2.0f * x * sx[i - 1] - sx[i - 2];
     for (int j = 1; j <= SKYSH_SUN_DY; ++j)
         sy[j] = j == 1 ? y : 2.0f * y * sy[j - 1] - sy[j - 2];
-    for (int c = 0; c < 3; ++c)
-        ln[c] = 0.0f;
+    SKYSH_REAL lx = 0.0f; /* three sums in registers, not one array in memory (its latency, without -O3) */
+    SKYSH_REAL ly = 0.0f;
+    SKYSH_REAL lz = 0.0f;
     for (int i = 0; i <= SKYSH_SUN_DX; ++i)
         for (int j = 0; j <= SKYSH_SUN_DY; ++j) {
             SKYSH_REAL w = sx[i] * sy[j];
             int base = 3 * (i * (SKYSH_SUN_DY + 1) + j);
-            for (int c = 0; c < 3; ++c)
-                ln[c] += w * SKYSH_SUN_TABLE[base + c];
+            lx += w * SKYSH_SUN_TABLE[base];
+            ly += w * SKYSH_SUN_TABLE[base + 1];
+            lz += w * SKYSH_SUN_TABLE[base + 2];
         }
-    for (int c = 0; c < 3; ++c)
-        ln[c] = SKYSH_EXP(ln[c]);
+    ln[0] = SKYSH_EXP(lx);
+    ln[1] = SKYSH_EXP(ly);
+    ln[2] = SKYSH_EXP(lz);
     for (int c = 0; c < 3; ++c)
         rgb[c] = SKYSH_SUN_RGB[3 * c] * ln[0] + SKYSH_SUN_RGB[3 * c + 1] * ln[1] + SKYSH_SUN_RGB[3 * c + 2] * ln[2];
 }
@@ -133,43 +172,44 @@ SKYSH_FN void skysh_sun_rgb(SKYSH_REAL ts, SKYSH_REAL t, SKYSH_OUT SKYSH_RGB(rgb
 /*
  * The ground (albedo x (E_sky + cos(ts) E_sun) / pi, zonal, Gibbs-filtered with gibbs) and the
  * sun (a delta windowed by skysh.model.solar.sun_window, colour clamped at SKYSH_SUN_CLAMP) added to
- * the rotated radiance coeffs; e_sky = sqrt(4 pi / 3) c_10 of the unfiltered sky (lux).
+ * the rotated radiance coeffs; e_sky = sqrt(4 pi / 3) c_10 of the unfiltered sky (lux); ct = cos(ts);
+ * rc[k], rs[k]: cos(k phi), sin(k phi) (skysh_turns).
  */
-SKYSH_FN void skysh_add_lights(SKYSH_REAL ts, SKYSH_REAL t, SKYSH_REAL phi, SKYSH_BOOL sun, SKYSH_BOOL ground,
-                               SKYSH_BOOL gibbs, SKYSH_IN SKYSH_RGB(albedo), SKYSH_IN SKYSH_RGB(e_sky),
+SKYSH_FN void skysh_add_lights(SKYSH_REAL ts, SKYSH_REAL ct, SKYSH_REAL t, SKYSH_IN SKYSH_REAL rc[SKYSH_BANDS],
+                               SKYSH_IN SKYSH_REAL rs[SKYSH_BANDS], SKYSH_BOOL sun, SKYSH_BOOL ground, SKYSH_BOOL gibbs,
+                               SKYSH_IN SKYSH_RGB(albedo), SKYSH_IN SKYSH_RGB(e_sky),
                                SKYSH_INOUT SKYSH_RGB(coeffs[SKYSH_COUNT]))
 {
     SKYSH_RGB(rgb);
     for (int c = 0; c < 3; ++c)
         rgb[c] = 0.0f;
     if (sun)
-        skysh_sun_rgb(ts, t, rgb);
-    if (ground) {
-        SKYSH_REAL ct = SKYSH_COS(ts);
+        skysh_sun_rgb(ts, ct, t, rgb);
+    if (ground)
         for (int l = 0; l < SKYSH_BANDS; ++l) {
             SKYSH_REAL g = SKYSH_GROUND[l] * (gibbs ? SKYSH_GIBBS[l] : 1.0f) * SKYSH_INV_PI;
             for (int c = 0; c < 3; ++c)
                 coeffs[l * (l + 1)][c] += g * albedo[c] * (e_sky[c] + ct * rgb[c]);
         }
-    }
     if (sun) {
-        SKYSH_REAL trig[2 * SKYSH_BANDS];
-        for (int k = 0; k < SKYSH_BANDS; ++k) {
-            trig[k] = SKYSH_COS(SKYSH_TO_REAL(k) * ts);
-            trig[SKYSH_BANDS + k] = SKYSH_SIN(SKYSH_TO_REAL(k) * ts);
-        }
+        SKYSH_REAL tc[SKYSH_BANDS]; /* cos(q ts), sin(q ts): the columns of SKYSH_SUN_TRIG */
+        SKYSH_REAL tsn[SKYSH_BANDS];
+        skysh_turns(ct, SKYSH_SIN(ts), tc, tsn);
         for (int c = 0; c < 3; ++c)
             rgb[c] = rgb[c] > SKYSH_SUN_CLAMP ? rgb[c] : SKYSH_SUN_CLAMP;
         for (int l = 0; l < SKYSH_BANDS; ++l)
-            for (int m = -l; m <= l; ++m) {
-                int k = m < 0 ? -m : m;
+            for (int k = 0; k <= l; ++k) { /* stored r, then its m = k and m = -k */
                 int r = l * (l + 1) / 2 + k;
                 SKYSH_REAL y = 0.0f;
-                for (int q = 0; q < 2 * SKYSH_BANDS; ++q)
-                    y += SKYSH_SUN_TRIG[r * 2 * SKYSH_BANDS + q] * trig[q];
-                y *= m < 0 ? SKYSH_SIN(SKYSH_TO_REAL(k) * phi) : SKYSH_COS(SKYSH_TO_REAL(k) * phi);
+                for (int q = 0; q < SKYSH_BANDS; ++q)
+                    y += SKYSH_SUN_TRIG[2 * SKYSH_BANDS * r + q] * tc[q];
+                for (int q = 0; q < SKYSH_BANDS; ++q)
+                    y += SKYSH_SUN_TRIG[(2 * r + 1) * SKYSH_BANDS + q] * tsn[q];
                 for (int c = 0; c < 3; ++c)
-                    coeffs[l * (l + 1) + m][c] += y * rgb[c];
+                    coeffs[l * (l + 1) + k][c] += y * rc[k] * rgb[c];
+                if (k > 0)
+                    for (int c = 0; c < 3; ++c)
+                        coeffs[l * (l + 1) - k][c] += y * rs[k] * rgb[c];
             }
     }
 }
@@ -188,7 +228,9 @@ SKYSH_FN SKYSH_STATUS skysh_evaluate(SKYSH_REAL sun_zenith, SKYSH_REAL turbidity
     SKYSH_REAL tx[SKYSH_DX + 1];
     SKYSH_REAL ty[SKYSH_DY + 1];
     SKYSH_REAL w[SKYSH_TERMS];
-    SKYSH_RGB(acc[SKYSH_ROWS]);
+    SKYSH_REAL acc[SKYSH_OUTPUTS];
+    SKYSH_REAL rc[SKYSH_BANDS]; /* cos(k phi), sin(k phi) */
+    SKYSH_REAL rs[SKYSH_BANDS];
     SKYSH_RGB(e_sky);
     SKYSH_RGB(albedo);
     for (int n = 0; n < SKYSH_COUNT; ++n)
@@ -212,7 +254,7 @@ SKYSH_FN SKYSH_STATUS skysh_evaluate(SKYSH_REAL sun_zenith, SKYSH_REAL turbidity
         return SKYSH_FAIL(-5);
     SKYSH_BOOL deringed = dering && table == 0; /* the table is certified non-negative: never deringed */
     SKYSH_BOOL post = deringed || sun || ground; /* then step 8 follows steps 6 and 7 */
-    SKYSH_REAL phi = SKYSH_FMOD(sun_azimuth, SKYSH_TWO_PI); /* as the runtime: exact, so k * phi stays small */
+    SKYSH_REAL phi = SKYSH_FMOD(sun_azimuth, SKYSH_TWO_PI); /* as the runtime: exact */
     SKYSH_REAL x = sun_zenith * SKYSH_X_SCALE - SKYSH_X_SHIFT;
     SKYSH_REAL y = SKYSH_LOG(turbidity) * SKYSH_Y_SCALE - SKYSH_Y_SHIFT;
     x = x < -1.0f ? -1.0f : (x > 1.0f ? 1.0f : x);
@@ -226,28 +268,30 @@ SKYSH_FN SKYSH_STATUS skysh_evaluate(SKYSH_REAL sun_zenith, SKYSH_REAL turbidity
     for (int i = 0; i <= SKYSH_DX; ++i)
         for (int j = 0; j <= SKYSH_DY; ++j)
             w[i * (SKYSH_DY + 1) + j] = tx[i] * ty[j];
-    for (int r = 0; r < SKYSH_ROWS; ++r) /* step 3 (with the table: the sky's c_10 only, for the ground) */
-        if (table == 0 || r == 1)
-            skysh_row(0, r, w, acc[r]);
-    SKYSH_REAL scale = skysh_luminance_scale(sun_zenith, turbidity);
+    if (table == 0) /* step 3 (with the table: the sky's c_10 only, for the ground) */
+        skysh_rows(w, acc);
+    else
+        skysh_c10(ground, w, acc);
+    SKYSH_REAL ct = SKYSH_COS(sun_zenith);
+    SKYSH_REAL scale = skysh_luminance_scale(sun_zenith, ct, turbidity);
     for (int c = 0; c < 3; ++c)
-        e_sky[c] = SKYSH_HF * acc[1][c] * scale; /* E_h of the unfiltered sky (skysh.model.ground) */
+        e_sky[c] = SKYSH_HF * acc[3 + c] * scale; /* E_h of the unfiltered sky (skysh.model.ground) */
 #if SKYSH_IRRADIANCE_TABLE
     if (table == 1) /* step 3 from the certified irradiance table: never filtered, never deringed */
-        for (int r = 0; r < SKYSH_HALF; ++r)
-            skysh_row(1, r, w, acc[r]);
+        skysh_table_rows(w, acc);
 #endif
+    skysh_turns(SKYSH_COS(phi), SKYSH_SIN(phi), rc, rs);
     for (int l = 0; l < SKYSH_BANDS; ++l) {
         SKYSH_REAL band = (post ? 1.0f : skysh_band_factor(mode, l)) * scale;
         int row = l * (l + 1) / 2; /* stored (l, 0) */
         if (gibbs)
             for (int c = 0; c < 3; ++c)
-                acc[row][c] *= SKYSH_GIBBS[l];
+                acc[3 * row + c] *= SKYSH_GIBBS[l];
         for (int m = -l; m <= l; ++m) {
             int k = m < 0 ? -m : m;
-            SKYSH_REAL rot = m < 0 ? SKYSH_SIN(SKYSH_TO_REAL(k) * phi) : SKYSH_COS(SKYSH_TO_REAL(k) * phi);
+            SKYSH_REAL rot = m < 0 ? rs[k] : rc[k];
             for (int c = 0; c < 3; ++c)
-                coeffs[l * (l + 1) + m][c] = acc[row + k][c] * rot * band;
+                coeffs[l * (l + 1) + m][c] = acc[3 * (row + k) + c] * rot * band;
         }
     }
 #if SKYSH_DERING
@@ -265,7 +309,7 @@ SKYSH_FN SKYSH_STATUS skysh_evaluate(SKYSH_REAL sun_zenith, SKYSH_REAL turbidity
     }
 #endif
     if (sun || ground)
-        skysh_add_lights(sun_zenith, turbidity, phi, sun, ground, gibbs, albedo, e_sky, coeffs);
+        skysh_add_lights(sun_zenith, ct, turbidity, rc, rs, sun, ground, gibbs, albedo, e_sky, coeffs);
     if (post && mode != 0)
         for (int l = 0; l < SKYSH_BANDS; ++l)
             for (int n = l * l; n < (l + 1) * (l + 1); ++n)
@@ -294,7 +338,7 @@ SKYSH_FN SKYSH_STATUS skysh_evaluate_sun_light(SKYSH_REAL sun_zenith, SKYSH_REAL
     direction[0] = SKYSH_SIN(sun_zenith) * SKYSH_COS(phi);
     direction[1] = SKYSH_SIN(sun_zenith) * SKYSH_SIN(phi);
     direction[2] = SKYSH_COS(sun_zenith);
-    skysh_sun_rgb(sun_zenith, turbidity, rgb);
+    skysh_sun_rgb(sun_zenith, direction[2], turbidity, rgb);
     return SKYSH_OK;
 }
 

@@ -92,7 +92,12 @@ const GROUND = new Float64Array(DATA.lights.ground);
 // The certified irradiance table (docs/irradiance.md): the radiance-equivalent E_lm / A_l of 3 bands over the
 // luminance scale, m >= 0 rows, laid out as TABLE (at its TERMS); IRRADIANCE_TABLE: whether this module has it.
 const IRRADIANCE_TABLE = DATA.irradiance !== null;
-const IRRADIANCE = new Float64Array(DATA.irradiance ?? []);
+// Its rows then the sky's row 1 (the unfiltered c_10, for the ground), so that one pass sums both.
+const IRRADIANCE = new Float64Array(IRRADIANCE_TABLE ? DATA.irradiance.length + 3 * TERMS : 0);
+if (IRRADIANCE_TABLE) {
+  IRRADIANCE.set(DATA.irradiance);
+  IRRADIANCE.set(TABLE.subarray(3 * TERMS, 6 * TERMS), DATA.irradiance.length);
+}
 
 // Engines: band = per-band factor folded before the rotation, then the rest of the engine's linear map
 // (skysh.export.tables.engine_plan) as a sparse table: output p = sum over k in [start[p], start[p + 1]) of
@@ -111,7 +116,7 @@ function enginePlan(plan) {
 const TX = new Float64Array(DX + 1);
 const TY = new Float64Array(DY + 1);
 const W = new Float64Array(TERMS); // T_i(x) T_j(y)
-const ACC = new Float64Array(HALF3);
+const ACC = new Float64Array(Math.max(HALF3, 21)); // the table's rows, or the irradiance table's 6 and the c_10
 const RADIANCE = new Float64Array(MAX_BANDS * MAX_BANDS * 3);
 const COS = new Float64Array(MAX_BANDS);
 const SIN = new Float64Array(MAX_BANDS);
@@ -120,6 +125,7 @@ const SUN_X = new Float64Array(SUN_DX + 1);
 const SUN_Y = new Float64Array(SUN_DY + 1);
 const LIGHT_RGB = new Float64Array(3);
 const GROUND_L = new Float64Array(3);
+const ALBEDO = new Float64Array(3); // the groundAlbedo option's three numbers
 const TRIG = new Float64Array(2 * MAX_BANDS);
 const OPTIONS = new Set(["bands", "gibbs", "irradiance", "dering", "irradianceTable", "sun", "groundAlbedo", "engine", "out"]);
 
@@ -193,18 +199,20 @@ function checkBands(bands, plans, engine) {
   return bands;
 }
 
-/** The groundAlbedo option: null (black) or three numbers in [0, 1]. */
+/** The groundAlbedo option: null (black) or its three numbers in [0, 1], copied into ALBEDO (no allocation). */
 function albedoOption(value) {
   if (value === undefined || value === 0) return null;
-  const rgb = typeof value === "number" ? [value, value, value] : value;
-  if (!(Array.isArray(rgb) || rgb instanceof Float64Array) || rgb.length !== 3 || rgb.some((v) => typeof v !== "number")) {
+  const one = typeof value === "number";
+  if (!one && (!(Array.isArray(value) || value instanceof Float64Array) || value.length !== 3
+    || typeof value[0] !== "number" || typeof value[1] !== "number" || typeof value[2] !== "number")) {
     throw new TypeError(`groundAlbedo must be a number or an array of 3 numbers, got ${describe(value)}`);
   }
-  if (!rgb.every((v) => v >= 0.0 && v <= 1.0)) {
-    throw new RangeError(`groundAlbedo must lie in [0, 1] per channel, got ${Array.from(rgb).join(", ")}`);
+  for (let c = 0; c < 3; c++) ALBEDO[c] = one ? value : value[c];
+  if (!(ALBEDO[0] >= 0.0 && ALBEDO[0] <= 1.0 && ALBEDO[1] >= 0.0 && ALBEDO[1] <= 1.0 && ALBEDO[2] >= 0.0 && ALBEDO[2] <= 1.0)) {
+    throw new RangeError(`groundAlbedo must lie in [0, 1] per channel, got ${Array.from(ALBEDO).join(", ")}`);
   }
   if ((LIGHTS & 2) === 0) throw new RangeError("groundAlbedo needs the sky's c_10: this module's file has 1 band");
-  return rgb.every((v) => v === 0.0) ? null : rgb;
+  return ALBEDO[0] === 0.0 && ALBEDO[1] === 0.0 && ALBEDO[2] === 0.0 ? null : ALBEDO;
 }
 
 /**
@@ -238,9 +246,8 @@ function zenithLuminance(ts, t) {
   return 1000.0 * ((ZENITH_Y[0] * t - ZENITH_Y[1]) * Math.tan(chi) - ZENITH_Y[2] * t + ZENITH_Y[3]);
 }
 
-/** Y_z / F_Y(0, ts): the sky's luminance scale, cd/m^2 (Preetham 1999, appendix). */
-function luminanceScale(ts, t) {
-  const ct = Math.cos(ts);
+/** Y_z / F_Y(0, ts): the sky's luminance scale, cd/m^2 (Preetham 1999, appendix); ct = cos(ts). */
+function luminanceScale(ts, t, ct) {
   const f = (1.0 + (PEREZ_Y[0] * t + PEREZ_Y[1]) * Math.exp(PEREZ_Y[2] * t + PEREZ_Y[3]))
     * (1.0 + (PEREZ_Y[4] * t + PEREZ_Y[5]) * Math.exp((PEREZ_Y[6] * t + PEREZ_Y[7]) * ts)
       + (PEREZ_Y[8] * t + PEREZ_Y[9]) * ct * ct);
@@ -252,14 +259,16 @@ function chebyshev(x, y, tx, ty) {
   x = x < -1.0 ? -1.0 : x > 1.0 ? 1.0 : x;
   y = y < -1.0 ? -1.0 : y > 1.0 ? 1.0 : y;
   tx[0] = 1.0;
+  tx[1] = x;
   ty[0] = 1.0;
-  for (let i = 1; i < tx.length; i++) tx[i] = i === 1 ? x : 2.0 * x * tx[i - 1] - tx[i - 2];
-  for (let j = 1; j < ty.length; j++) ty[j] = j === 1 ? y : 2.0 * y * ty[j - 1] - ty[j - 2];
+  ty[1] = y;
+  for (let i = 2; i < tx.length; i++) tx[i] = 2.0 * x * tx[i - 1] - tx[i - 2];
+  for (let j = 2; j < ty.length; j++) ty[j] = 2.0 * y * ty[j - 1] - ty[j - 2];
 }
 
-/** Habel eq. (1) at the frame's W: the first h3 / 3 rows of the table rows (laid out as TABLE) into ACC. */
-function rowSums(rows, h3) {
-  for (let k = 0, b = 0; k < h3; k += 3) { // six independent sums (latency)
+/** Habel eq. (1) at the frame's W: `count` rows of a table laid out as TABLE, from row `first`, into ACC. */
+function rowSums(rows, first, count) {
+  for (let k = 0, b = first * TERMS * 3; k < 3 * count; k += 3) { // six independent sums (latency)
     let r0 = 0.0, g0 = 0.0, b0 = 0.0, r1 = 0.0, g1 = 0.0, b1 = 0.0, q = 0;
     for (; q + 1 < TERMS; q += 2, b += 6) {
       const w0 = W[q], w1 = W[q + 1];
@@ -283,20 +292,23 @@ function rowSums(rows, h3) {
   }
 }
 
-/** Radiance coefficients of n bands into o (coefficient-major RGB), band l times factor[l]; returns the
- * luminance scale. The rows from TABLE, or with table the certified IRRADIANCE's; C10 the sky's c_10. */
-function evaluate(ts, t, phi, n, gibbs, factor, o, table) {
+/** Radiance coefficients of n bands into o (coefficient-major RGB), band l times factor[l] (none: null); returns
+ * the luminance scale. The rows from TABLE, or with table the certified IRRADIANCE's; with ground, C10 the sky's
+ * c_10 (unfiltered). ct = cos(ts); COS, SIN: cos and sin of m phi (the rotation, also the sun's). */
+function evaluate(ts, t, phi, ct, n, gibbs, factor, o, table, ground) {
   chebyshev(ts * X_SCALE - X_SHIFT, Math.log(t) * Y_SCALE - Y_SHIFT, TX, TY);
   for (let i = 0, q = 0; i <= DX; i++) {
     const xi = TX[i];
     for (let j = 0; j <= DY; j++, q++) W[q] = xi * TY[j];
   }
-  rowSums(TABLE, n > 1 && !table ? ((n * (n + 1)) / 2) * 3 : 6); // one band or the table: row 1 too (c_10)
-  C10[0] = ACC[3];
-  C10[1] = ACC[4];
-  C10[2] = ACC[5];
-  if (table) rowSums(IRRADIANCE, 18); // 3 bands: the table's 6 rows in place of the sky's
-  const scale = luminanceScale(ts, t);
+  if (table) { // 3 bands: the table's 6 rows in place of the sky's, then the sky's row 1 for the ground
+    rowSums(IRRADIANCE, 0, ground ? 7 : 6);
+    for (let c = 0; c < 3; c++) C10[c] = ACC[18 + c]; // read with ground only
+  } else {
+    rowSums(TABLE, 0, n > 1 ? (n * (n + 1)) / 2 : ground ? 2 : 1); // one band: its row 1 is the c_10
+    for (let c = 0; c < 3; c++) C10[c] = ACC[3 + c];
+  }
+  const scale = luminanceScale(ts, t, ct);
   const c1 = Math.cos(phi), s1 = Math.sin(phi);
   COS[0] = 1.0;
   SIN[0] = 0.0;
@@ -834,11 +846,11 @@ function deringInPlace(c, n) {
 // ---------------------------------------------------------------------------------------------------------------
 // The sun and the ground (skysh.export.lights' steps, after the sky's rotation and its deringing)
 // ---------------------------------------------------------------------------------------------------------------
-/** The sun's RGB direct normal illuminance (lux) into rgb (Preetham 1999 appendix, fitted). */
-function sunRgb(ts, t, rgb) {
-  const m = 1.0 / (Math.cos(ts) + AM_A * Math.pow(AM_B - ts * DEG, AM_NEG_C)); // Kasten 1966
+/** The sun's RGB direct normal illuminance (lux) into rgb (Preetham 1999 appendix, fitted); ct = cos(ts). */
+function sunRgb(ts, t, ct, rgb) {
+  const m = 1.0 / (ct + AM_A * Math.pow(AM_B - ts * DEG, AM_NEG_C)); // Kasten 1966
   chebyshev((m - M0) * SX_SCALE - 1.0, (t - SUN_TMIN) * SY_SCALE - 1.0, SUN_X, SUN_Y);
-  let l0 = 0.0, l1 = 0.0, l2 = 0.0;
+  let l0 = 0.0, l1 = 0.0, l2 = 0.0; // in the fit's order: reordered, the ln lux (~11) moved the sun's SH by 4e-14 of the DC
   for (let i = 0, b = 0; i <= SUN_DX; i++) {
     for (let j = 0; j <= SUN_DY; j++, b += 3) {
       const w = SUN_X[i] * SUN_Y[j];
@@ -851,12 +863,13 @@ function sunRgb(ts, t, rgb) {
   for (let c = 0; c < 3; c++) rgb[c] = SUN_RGB[3 * c] * e0 + SUN_RGB[3 * c + 1] * e1 + SUN_RGB[3 * c + 2] * e2;
 }
 
-/** Add the ground (albedo or null) and the sun to the rotated n-band radiance o; scale: the luminance scale. */
-function addLights(ts, t, n, gibbs, sun, albedo, scale, o) {
-  LIGHT_RGB.fill(0.0);
-  if (sun) sunRgb(ts, t, LIGHT_RGB);
+/** Add the ground (albedo or null) and the sun to the rotated n-band radiance o; scale: the luminance scale, ct:
+ * cos(ts). The sun's cos and sin of k ts by angle addition from ct and sin(ts); its rotation, the sky's COS and SIN. */
+function addLights(ts, t, ct, n, gibbs, sun, albedo, scale, o) {
+  LIGHT_RGB[0] = LIGHT_RGB[1] = LIGHT_RGB[2] = 0.0;
+  if (sun) sunRgb(ts, t, ct, LIGHT_RGB);
   if (albedo !== null) { // E_sky = sqrt(4 pi / 3) c_10 of the unfiltered sky: C10 x scale
-    const ct = Math.cos(ts), g0 = (n * (n - 1)) / 2;
+    const g0 = (n * (n - 1)) / 2;
     for (let c = 0; c < 3; c++) GROUND_L[c] = albedo[c] * (HF * scale * C10[c] + ct * LIGHT_RGB[c]) * INV_PI;
     for (let l = 0; l < n; l++) {
       const g = gibbs ? GROUND[l] * GIBBS[g0 + l] : GROUND[l], i3 = l * (l + 1) * 3;
@@ -864,20 +877,30 @@ function addLights(ts, t, n, gibbs, sun, albedo, scale, o) {
     }
   }
   if (!sun) return;
-  for (let k = 0; k < n; k++) {
-    TRIG[k] = Math.cos(k * ts);
-    TRIG[n + k] = Math.sin(k * ts);
+  const st = Math.sin(ts);
+  TRIG[0] = 1.0;
+  TRIG[n] = 0.0;
+  for (let k = 1; k < n; k++) {
+    TRIG[k] = TRIG[k - 1] * ct - TRIG[n + k - 1] * st;
+    TRIG[n + k] = TRIG[n + k - 1] * ct + TRIG[k - 1] * st;
   }
   for (let c = 0; c < 3; c++) if (!(LIGHT_RGB[c] > SUN_CLAMP)) LIGHT_RGB[c] = SUN_CLAMP;
-  const w0 = (n * (n - 1)) / 2, width = 2 * MAX_BANDS;
+  const r0 = LIGHT_RGB[0], r1 = LIGHT_RGB[1], r2 = LIGHT_RGB[2], w0 = (n * (n - 1)) / 2, width = 2 * MAX_BANDS;
   for (let l = 0; l < n; l++) {
-    for (let m = -l; m <= l; m++) {
-      const k = m < 0 ? -m : m, r = ((l * (l + 1)) / 2 + k) * width;
+    const window = SUN_WINDOWS[w0 + l], centre = l * (l + 1) * 3;
+    for (let k = 0, r = ((l * (l + 1)) / 2) * width; k <= l; k++, r += width) { // one row: m = +k and m = -k
       let y = 0.0;
       for (let q = 0; q < n; q++) y += SUN_TRIG[r + q] * TRIG[q] + SUN_TRIG[r + MAX_BANDS + q] * TRIG[n + q];
-      y *= SUN_WINDOWS[w0 + l] * (m < 0 ? SIN[k] : COS[k]);
-      const i3 = (l * (l + 1) + m) * 3;
-      for (let c = 0; c < 3; c++) o[i3 + c] += y * LIGHT_RGB[c];
+      y *= window;
+      const yc = y * COS[k], plus = centre + 3 * k;
+      o[plus] += yc * r0;
+      o[plus + 1] += yc * r1;
+      o[plus + 2] += yc * r2;
+      if (k === 0) continue;
+      const ys = y * SIN[k], minus = centre - 3 * k;
+      o[minus] += ys * r0;
+      o[minus + 1] += ys * r1;
+      o[minus + 2] += ys * r2;
     }
   }
 }
@@ -930,9 +953,10 @@ export function coefficients(sunZenith, turbidity, sunAzimuth = 0, options = {})
   }
   const phi = sunAzimuth % TWO_PI; // exact, as the Python runtime's math.fmod
   const factor = plan !== null ? plan.band : irradiance ? LOBE : null;
-  const scale = evaluate(sunZenith, turbidity, phi, bands, gibbs, post ? null : factor, RADIANCE, table);
+  const ct = Math.cos(sunZenith);
+  const scale = evaluate(sunZenith, turbidity, phi, ct, bands, gibbs, post ? null : factor, RADIANCE, table, albedo !== null);
   if (dering) deringInPlace(RADIANCE, bands);
-  if (sun || albedo !== null) addLights(sunZenith, turbidity, bands, gibbs, sun, albedo, scale, RADIANCE);
+  if (sun || albedo !== null) addLights(sunZenith, turbidity, ct, bands, gibbs, sun, albedo, scale, RADIANCE);
   if (post && factor !== null) scaleBands(RADIANCE, bands, factor);
   if (plan !== null) {
     applyPlan(plan, RADIANCE, out);
@@ -957,6 +981,6 @@ export function sunLight(sunZenith, turbidity, sunAzimuth = 0) {
   checkFrame(sunZenith, turbidity, sunAzimuth);
   if ((LIGHTS & 1) === 0) throw new RangeError("the sun needs the coefficient file's sun table: this module has none");
   const rgb = [0.0, 0.0, 0.0], phi = sunAzimuth % TWO_PI, s = Math.sin(sunZenith);
-  sunRgb(sunZenith, turbidity, rgb);
+  sunRgb(sunZenith, turbidity, Math.cos(sunZenith), rgb);
   return { direction: [s * Math.cos(phi), s * Math.sin(phi), Math.cos(sunZenith)], rgb };
 }
