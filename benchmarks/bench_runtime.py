@@ -26,9 +26,9 @@ in one run, so the ratios do not depend on the machine's speed:
 
 5.  ``curve``: the per-frame cost of one batched call of 1, 10, ..., 10^5 frames (10^6 with
     ``--million``) at 3 and 7 bands, radiance, irradiance and lit (sun and ground), each against its
-    best per-frame cost at 10^3..10^4 frames (the ratio). Target (issue 26): ratio <= 1.5 from 100
-    frames up; below that a call's fixed cost (about 45 numpy calls, ~1 us each) is the floor, printed
-    beside it (``fixed_us``: the cost of one frame in a batch).
+    best per-frame cost at 10^3..10^4 frames (the ratio). Target (issue 26): ratio <= 1.5 from 10
+    frames up; below a few hundred frames the floor is numpy's cost per call, printed beside it for
+    radiance (:func:`numpy_floor`, and ``fixed_us``: the cost of one frame in a batch).
 6.  ``bands``: one scalar call at 1..7 bands (radiance), against the 7-band call: the scalar path is
     bound by numpy's per-call cost, so it is nearly flat in the bands.
 
@@ -44,9 +44,16 @@ Output, one JSON object per line::
     {"bench": "single", "bands": 7, "runtime_s": ..., "baseline": "min(v @ A, np.dot(v, A)), A (112, 147)",
      "baseline_s": ..., "ratio": ..., "target": "ratio <= 3.5", "met": true}
 
-Run: ``PYTHONPATH=. python benchmarks/bench_runtime.py [--repeats 7] [--batch 100000] [--curve-only] [--million]``.
-The curve is timed in thread CPU time (:func:`time.thread_time`), the frames of a size evaluated in turn with
-the other sizes' (interleaved rounds, the median kept).
+Run: ``PYTHONPATH=. python benchmarks/bench_runtime.py [--repeats 7] [--batch 100000] [--curve-only] [--million]``
+(the curve alone: ``--curve-only [--sizes 1000,10000,...] [--bands 7] [--cases radiance]``; the sizes must include
+1000 or 10000, the best's).
+The curve is timed in the process's CPU time (:func:`time.process_time`, every thread: the matrix product's
+BLAS threads included, whose spin-waits a thread clock or wall time on an idle core would hide), the frames of a
+size evaluated in turn with the other sizes' (interleaved rounds, the median kept); for radiance up to
+:data:`FLOOR_UP_TO` frames beside :func:`numpy_floor`, the least numpy such a batch can be (``floor_us``,
+``floor_ratio``: the floor's per-frame cost over the best, ``over_floor``: the runtime's over the floor's), and for
+every size ``fresh_us``: per frame, allocating and writing once an array of the result's size (the system's price for
+fresh memory, which beyond tens of MB each call pays anew).
 """
 
 from __future__ import annotations
@@ -62,6 +69,7 @@ from collections.abc import Callable
 import _timing
 import numpy as np
 
+from skysh.domain import SKY
 from skysh.model import preetham
 from skysh.runtime import SkySH
 
@@ -116,30 +124,71 @@ CURVE_FRAMES: float = 2e5
 """Frames evaluated per timed round of a size (at least one call)."""
 
 
+FLOOR_UP_TO: int = 100
+"""Largest batch the numpy floor is timed at: its ``cos`` route is the cheapest in numpy calls, which is what bounds
+small batches; beyond a few hundred frames the runtime's doubling and angle addition take fewer transcendentals."""
+
+
+def numpy_floor(plan: object, ts: np.ndarray, t: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    """The least numpy a radiance batch can be, written out: the runtime's arithmetic (Habel eqs. 1, 4; the
+    luminance scale) in 13 numpy calls on checked, contiguous inputs, with no checks, no chunks, no broadcasting:
+    the Chebyshev terms and the rotation factors each from one ``cos`` (``T_k = cos(k acos x)``), one outer
+    product, one matrix product, one gather-and-multiply. A batch cannot cost less in numpy, whatever its code."""
+    i1, i2 = plan.split  # type: ignore[attr-defined]
+    angle_map, n = plan.angle_map, ts.shape[0]  # type: ignore[attr-defined]
+    xy = np.stack((ts * SKY.x.scale - SKY.x.shift, np.log(t) * SKY.y.scale - SKY.y.shift))
+    packed = np.cos(angle_map[:i2, :2] @ np.arccos(np.clip(xy, -1.0, 1.0)))
+    packed[i1:] *= preetham.luminance_scale_unchecked(ts, t, np)
+    design = (packed[:i1, None, :] * packed[None, i1:, :]).reshape(-1, n)
+    out = design.T @ plan.table_flat  # type: ignore[attr-defined]
+    rot = np.cos(np.multiply.outer(angle_map[i2:, 2], phi) + angle_map[i2:, 3:4])  # cos(m phi), sin(m phi)
+    out.reshape(n, -1, 3)[...] *= rot[plan.batch_rot_index].T[:, :, None]  # type: ignore[attr-defined]
+    return out
+
+
 def curve(sky: SkySH, bands: int, case: str, sizes: list[int], repeats: int, rng: np.random.Generator) -> None:
-    """Emit the per-frame cost of each batch size (median over interleaved rounds) against the best."""
+    """Emit the per-frame cost of each batch size (median over interleaved rounds) against the best, and for
+    radiance the numpy floor's (:func:`numpy_floor`) beside it."""
     options = dict(CURVE_CASES[case])
     if case == "irradiance" and bands > 3:  # deringing each 7-band function (~0.6 ms) is bench_dering.py's
         options["dering"] = False
     calls = {}
+    plan = sky.plan(bands)
     for n in sizes:
         ts, tu, phi = rng.uniform(0.0, math.pi / 2.0, n), rng.uniform(2.5, 6.0, n), rng.uniform(-math.pi, math.pi, n)
         calls[n] = (max(1, int(CURVE_FRAMES // n)), ts, tu, phi)
+        np.testing.assert_allclose(numpy_floor(plan, ts, tu, phi).reshape(n, -1, 3),  # the floor computes the same
+                                   sky.coefficients(ts, tu, phi, bands=bands), rtol=1e-9, atol=1e-9)
     rounds: dict[int, list[float]] = {n: [] for n in sizes}
+    fresh_rounds: dict[int, list[float]] = {n: [] for n in sizes}  # a fresh result's size, allocated and written once
+    rows = bands * bands + (1 if case == "lit" else 0)
+    floor_rounds: dict[int, list[float]] = {n: [] for n in sizes if case == "radiance" and n <= FLOOR_UP_TO}
     for _, ts, tu, phi in calls.values():
         sky.coefficients(ts, tu, phi, bands=bands, **options)  # warm-up: plans, first touch
     for _ in range(repeats):
         for n, (number, ts, tu, phi) in calls.items():
-            start = time.thread_time()
+            start = time.process_time()
             for _ in range(number):
                 sky.coefficients(ts, tu, phi, bands=bands, **options)
-            rounds[n].append((time.thread_time() - start) / (number * n))
+            rounds[n].append((time.process_time() - start) / (number * n))
+            start = time.process_time()
+            np.empty((n, rows, 3)).fill(0.0)
+            fresh_rounds[n].append((time.process_time() - start) / n)
+            if n in floor_rounds:
+                start = time.process_time()
+                for _ in range(number):
+                    numpy_floor(plan, ts, tu, phi)
+                floor_rounds[n].append((time.process_time() - start) / (number * n))
     per_frame = {n: statistics.median(r) for n, r in rounds.items()}
+    floor = {n: statistics.median(r) for n, r in floor_rounds.items()}
     best = min(per_frame[n] for n in CURVE_BEST if n in per_frame)
     for n in sizes:
+        extra: dict[str, object] = {"fresh_us": statistics.median(fresh_rounds[n]) * 1e6}
+        if n in floor:
+            extra.update(floor_us=floor[n] * 1e6, floor_ratio=floor[n] / best, over_floor=per_frame[n] / floor[n])
         emit("curve", bands, per_frame[n], f"best per frame at {CURVE_BEST[0]}..{CURVE_BEST[1]}", best, case=case,
              frames=n, per_frame_us=per_frame[n] * 1e6, fixed_us=per_frame[1] * 1e6 if 1 in per_frame else None,
-             in_scope=n >= 100)
+             in_scope=n >= 100, **extra)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -150,6 +199,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--curve-only", action="store_true", help="only the batch curve and the bands (5, 6)")
     parser.add_argument("--million", action="store_true", help="the curve up to 10^6 frames (GB-sized results)")
+    parser.add_argument("--sizes", default=None, help="the curve's batch sizes only, comma-separated (e.g. "
+                        "1000,10000,100000,1000000); with --curve-only")
+    parser.add_argument("--bands", default=None, help="the curve's band counts only, comma-separated (default 7,3)")
+    parser.add_argument("--cases", default=None, help=f"the curve's cases only, comma-separated ({', '.join(CURVE_CASES)})")
     args = parser.parse_args(argv)
 
     sky = SkySH.load()
@@ -158,9 +211,9 @@ def main(argv: list[str] | None = None) -> int:
                                   batch=args.batch)), flush=True)
 
     rng = np.random.default_rng(args.seed)
-    sizes = [10**k for k in range(7 if args.million else 6)]
-    for bands in BANDS:
-        for case in CURVE_CASES:
+    sizes = [int(v) for v in args.sizes.split(",")] if args.sizes else [10**k for k in range(7 if args.million else 6)]
+    for bands in [int(v) for v in args.bands.split(",")] if args.bands else BANDS:
+        for case in args.cases.split(",") if args.cases else CURVE_CASES:
             curve(sky, bands, case, sizes, args.repeats, rng)
     t = interleaved_best({str(b): (lambda b=b: sky.coefficients(0.5, 3.0, 1.0, bands=b)) for b in range(1, 8)},
                          args.repeats, clock=time.thread_time)

@@ -1,9 +1,10 @@
 """
-skysh: spherical-harmonic lighting of the Preetham sky for real-time renderers
-============================================================================
+skysh: spherical-harmonic lighting of physically based skies for real-time renderers
+===================================================================================
 
 -   :class:`skysh.SkySH`: the per-frame runtime (load once, then
-    ``sky.coefficients(sun_zenith, turbidity, sun_azimuth)``).
+    ``sky.coefficients(sun_zenith, turbidity, sun_azimuth)``); ``SkySH.load(model="hosek-wilkie")``
+    gives the Hosek-Wilkie (2012) sky with the same interface (:mod:`skysh.hosek_runtime`).
 -   :mod:`skysh.sh.basis`: real SH mathematics (basis, projection, rotation, irradiance).
 -   :mod:`skysh.model.preetham`: the Preetham (1999) sky and its reference SH projection.
 

@@ -10,6 +10,7 @@ The per-frame options, checked and resolved once
     "Defaults follow the intent" are written: :meth:`skysh.SkySH.coefficients`,
     ``skysh coeffs`` (:mod:`skysh.app.cli`) and everything built on them take their
     flags from it.
+-   :data:`MODELS`: the sky models a runtime loads.
 -   :func:`check_albedo` (and :data:`ALBEDO_RANGE`): the ``ground_albedo``
     parameter, checked (also :mod:`skysh.lighting.lights`' names).
 
@@ -33,7 +34,11 @@ import numpy as np
 
 from skysh.checks import as_float_array, check_bands, check_flag, number_text, short_repr
 
-__all__ = ["ALBEDO_RANGE", "check_albedo", "Options"]
+__all__ = ["ALBEDO_RANGE", "MODELS", "check_albedo", "Options"]
+
+MODELS: tuple[str, ...] = ("preetham", "hosek-wilkie")
+"""The sky models a runtime loads (:meth:`skysh.SkySH.load`'s ``model``, the CLI's ``--model``): the fitted
+Preetham table, or Hosek-Wilkie projected per frame from its exact model (:mod:`skysh.hosek_runtime`)."""
 
 ALBEDO_RANGE: tuple[float, float] = (0.0, 1.0)
 """Valid ground albedo per channel (a Lambertian reflectance)."""

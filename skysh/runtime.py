@@ -55,6 +55,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from skysh.checks import (
     check_bands,
+    check_choice,
     check_dirs,
     check_flag,
     check_range,
@@ -69,11 +70,13 @@ from skysh.lighting import lights
 from skysh.lighting.sunlight import SunLight
 from skysh.model import ground
 from skysh.model.preetham import luminance_scale_unchecked as _luminance_scale
-from skysh.options import Options
+from skysh.options import MODELS, Options
 from skysh.sh import basis as sh
 from skysh.table import coefficient_file, poly
 
 __all__ = ["SkySH", "gibbs_factors"]
+
+gibbs_factors = sh.gibbs_factors  # the filter's factors, public here since the runtime first offered them
 
 # The fitted domain (skysh.domain.SKY) as floats for the scalar fast path: x = zenith _XS - _XH, y = ln(T) _YS - _YH.
 _XS, _XH, _YS, _YH = SKY.x.scale, SKY.x.shift, SKY.y.scale, SKY.y.shift
@@ -89,17 +92,6 @@ scalar path) rather than by doubling and angle addition: fewer numpy calls, more
 cross near here (``python benchmarks/bench_runtime.py --curve-only``)."""
 
 _RESOLVED_CACHE: int = 256  # resolved Options kept per SkySH (cleared when full)
-
-
-def gibbs_factors(bands: int) -> NDArray[np.float64]:
-    """
-    Zonal Gibbs filter of Habel eq. (5): sinc(pi l / N) for l = 0 .. N - 1, N = ``bands``.
-
-    Only the zonal (m = 0) coefficients are multiplied by these factors; the
-    factor of l = 0 is 1.
-    """
-    bands = check_bands(bands)
-    return np.sinc(np.arange(bands) / bands)  # numpy's sinc(x) = sin(pi x) / (pi x)
 
 
 def _rotation_factors(phi: NDArray[np.float64], bands: int) -> NDArray[np.float64]:
@@ -191,7 +183,7 @@ def _half_rows(sky_table: coefficient_file.SkyTable, bands: int, gibbs: bool, c1
         half = np.concatenate([half, extra if sky_table.bands > 1 else np.zeros((half.shape[0], 1, 3))], axis=1)
     if gibbs:  # Habel eq. (5) folded into the zonal rows (the seed's own optimisation)
         zonal = np.flatnonzero(m_of == 0)
-        half[:, zonal] *= gibbs_factors(bands)[l_of[zonal]][:, None]
+        half[:, zonal] *= sh.gibbs_factors(bands)[l_of[zonal]][:, None]
     return half
 
 
@@ -223,6 +215,9 @@ class SkySH:
     (9, 3)
     """
 
+    model: str = "preetham"
+    """The sky model (:data:`skysh.options.MODELS`)."""
+
     def __init__(self, sky_table: coefficient_file.SkyTable, path: Path | None = None) -> None:
         sky_table.validate()
         self.table: coefficient_file.SkyTable = sky_table
@@ -244,10 +239,21 @@ class SkySH:
             lobe: _Plan(sky_table, 3, False, rows_from=irradiance, lobe=lobe) for lobe in (False, True)}
 
     @classmethod
-    def load(cls, path: str | Path | None = None) -> SkySH:
+    def load(cls, path: str | Path | None = None, model: str = "preetham") -> Any:
         """Load the shipped coefficient file (or ``path``, a str or os.PathLike naming a file), checked (see
         :func:`skysh.table.coefficient_file.read`, whose CoefficientFileError, a ValueError, names ``path`` when it is
-        neither, e.g. bytes or a number)."""
+        neither, e.g. bytes or a number).
+
+        ``model`` (:data:`skysh.options.MODELS`): "preetham" (default) gives this class; "hosek-wilkie" a
+        :class:`skysh.hosek_runtime.HosekWilkieSH`, the same per-frame interface over the exact model (no file:
+        ``path`` must be None)."""
+        if check_choice(model, "model", MODELS) == "hosek-wilkie":
+            if path is not None:
+                raise ValueError(f"path must be None for model='hosek-wilkie' (projected from its exact model, it "
+                                 f"reads no coefficient file), got {short_repr(path)}")
+            from skysh.hosek_runtime import HosekWilkieSH
+
+            return HosekWilkieSH()
         sky_table = coefficient_file.read(path)  # checks path first, as skysh.table.container.as_path does
         return cls(sky_table, coefficient_file.default_path() if path is None else Path(path))
 

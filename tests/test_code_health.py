@@ -441,8 +441,10 @@ def test_prose_scan_finds_the_written_domains():
 
 def test_startup_copies_match_their_source():
     """Values :mod:`skysh.app.cli` repeats so that building its parser imports nothing equal their source."""
+    from skysh import options
     from skysh.app import cli, render
 
+    assert cli.MODELS == options.MODELS
     assert cli.RENDER_WIDTH_RANGE == render.PANEL_WIDTH_RANGE
     assert cli.DEFAULT_RENDER_WIDTH == render.DEFAULT_PANEL_WIDTH
 

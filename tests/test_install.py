@@ -10,13 +10,17 @@ repository, so nothing can be imported from the source tree.
 from __future__ import annotations
 
 import json
+import math
 import os
 import subprocess
 import venv
 from pathlib import Path
 
+import numpy as np
 import pytest
 from conftest import ROOT, environment_without_pythonpath
+
+from skysh import SkySH
 
 pytestmark = pytest.mark.integration  # builds a wheel with setuptools and installs it with pip into a venv
 
@@ -51,6 +55,21 @@ class TestInstalledWheel:
         coefficients = payload["coefficients"]
         assert len(coefficients) == 9 and all(len(row) == 3 for row in coefficients)
         assert coefficients[0][1] > 0.0  # the DC term of the sky is positive
+
+    def test_hosek_wilkie_runs_from_the_wheel_without_mitsuba(self, installed: Path, tmp_path: Path) -> None:
+        """Issue 27: the Hosek-Wilkie dataset ships in the wheel; mitsuba (a test-only extra) is made unimportable."""
+        argv = ["coeffs", "--sun-zenith", "30", "--sun-azimuth", "45", "--turbidity", "7", "--model", "hosek-wilkie",
+                "--albedo", "0.3", "--format", "json"]
+        code = ("import sys; sys.modules['mitsuba'] = sys.modules['drjit'] = None; from skysh.app import cli; "
+                "from skysh.model import hosek_data; print(hosek_data.DATA_PATH, file=sys.stderr); "
+                f"raise SystemExit(cli.main({argv!r}))")
+        result = subprocess.run([str(installed / "python"), "-c", code], cwd=tmp_path, env=_clean_env(),
+                                capture_output=True, text=True)
+        assert result.returncode == 0, result.stderr
+        assert str(ROOT) not in result.stderr and "hosek_wilkie_sky.npz" in result.stderr, result.stderr
+        payload = json.loads(result.stdout)
+        expected = SkySH.load(model="hosek-wilkie").coefficients(math.radians(30), 7.0, math.radians(45), albedo=0.3)
+        np.testing.assert_allclose(payload["coefficients"], expected, rtol=1e-12)  # JSON round-trips float64
 
     def test_package_and_data_come_from_the_wheel(self, installed: Path, tmp_path: Path) -> None:
         code = (

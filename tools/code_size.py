@@ -67,8 +67,8 @@ EXPORT_PACKAGE: str = f"{PACKAGE}.export"
 PACKAGE_BUDGETS: dict[str, int] = {
     "skysh": 15, "skysh.__main__": 5, "skysh._version": 1, "skysh.checks": 155, "skysh.domain": 110,
     "skysh.options": 90, "skysh.files": 65, "skysh.literals": 30,
-    "skysh.sh": 440, "skysh.post": 660, "skysh.model": 980, "skysh.table": 1225, "skysh.lighting": 440,
-    "skysh.runtime": 370, "skysh.engines": 395, "skysh.export": 700, "skysh.app": 1360,
+    "skysh.sh": 440, "skysh.post": 660, "skysh.model": 995, "skysh.table": 1225, "skysh.lighting": 440,
+    "skysh.runtime": 375, "skysh.hosek_runtime": 70, "skysh.engines": 395, "skysh.export": 700, "skysh.app": 1450,
 }
 """Code lines each package (a sub-package, or a module of the package's root) may hold (issue 24, item 5):
 a ceiling a change must argue with, counted in code lines so that prose is never squeezed to pay for code.
@@ -77,12 +77,15 @@ chords, the certificate's start and gallop, ``least_window``, ``window_at``) is 
 ``skysh.runtime`` (350 to 370: chunked batches, the few-frames route), ``skysh.table`` (1210 to 1225: Chebyshev rows by
 doubling), ``skysh.checks`` (145 to 155: range checks in two reductions) and ``skysh.post`` (650 to 660: deringing
 a chunk of functions at a time); issue 27 ``skysh.model`` (900 to 980: the Hosek-Wilkie per-frame rule, 175 lines,
-with the dataset's reader shrunk by 90)."""
+with the dataset's reader shrunk by 90; to 995: an albedo per RGB channel), ``skysh.hosek_runtime`` (new, 70: the
+Hosek-Wilkie runtime object), ``skysh.runtime`` (to 375: ``SkySH.load(model=)``) and ``skysh.app`` (1360 to 1450:
+``--model`` and ``--albedo`` on three commands, the Hosek-Wilkie render panel and the viewer's model switch, 84 lines)."""
 
-BUDGETS: dict[str, int] = {"skysh code lines": 6850, "export code lines": 700, "skysh __all__ names": 250,
+BUDGETS: dict[str, int] = {"skysh code lines": 7100, "export code lines": 700, "skysh __all__ names": 260,
                            "import cycles": 0}
 """Issue 24's targets, printed beside the measured numbers (the total raised from 6,500 by issue 25's least
-window: 136 lines in ``skysh.post``, 33 in ``skysh.export``; to 6,850 by issues 26 and 27, as the packages' budgets)."""
+window: 136 lines in ``skysh.post``, 33 in ``skysh.export``; to 6,850 by issues 26 and 27, as the packages' budgets;
+to 7,100 and 260 names by issue 27's Hosek-Wilkie runtime, exports, command line and viewer)."""
 
 NOT_CODE: frozenset[int] = frozenset({tokenize.COMMENT, tokenize.NL, tokenize.NEWLINE, tokenize.INDENT,
                                       tokenize.DEDENT, tokenize.ENDMARKER, tokenize.ENCODING})

@@ -35,6 +35,7 @@ import math
 import os
 import sys
 import time
+from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
@@ -77,16 +78,21 @@ def _one(args: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
     return coeffs, hosek.sky_minimum(ts, t, a)
 
 
-def truth(ts: np.ndarray, t: np.ndarray, a: np.ndarray, jobs: int) -> tuple[np.ndarray, np.ndarray, int]:
-    """(P, 28, 3) m >= 0 coefficients (cd/m^2), (P, 3) E_mean denominators, and how many MEAN_FLOOR set."""
-    points = [(float(x), float(y), float(z)) for x, y, z in zip(ts, t, a)]
+def project_skies(one: Callable[[tuple[float, float, float]], tuple[np.ndarray, np.ndarray]],
+                  points: list[tuple[float, float, float]], jobs: int) -> tuple[np.ndarray, np.ndarray]:
+    """``one`` (a picklable ``(sun zenith, turbidity, albedo) -> (coefficients, minima)``) at every point, in order,
+    over ``jobs`` worker processes when ``jobs`` > 1: the stacked (P, ...) coefficients and (P, 4) sky minima."""
     if jobs > 1:
         with ProcessPoolExecutor(jobs) as pool:
-            results = list(pool.map(_one, points, chunksize=8))
+            results = list(pool.map(one, points, chunksize=8))
     else:
-        results = [_one(p) for p in points]
-    coeffs = np.stack([r[0] for r in results])
-    lmin = np.stack([r[1] for r in results])
+        results = [one(p) for p in points]
+    return np.stack([r[0] for r in results]), np.stack([r[1] for r in results])
+
+
+def truth(ts: np.ndarray, t: np.ndarray, a: np.ndarray, jobs: int) -> tuple[np.ndarray, np.ndarray, int]:
+    """(P, 28, 3) m >= 0 coefficients (cd/m^2), (P, 3) E_mean denominators, and how many MEAN_FLOOR set."""
+    coeffs, lmin = project_skies(_one, [(float(x), float(y), float(z)) for x, y, z in zip(ts, t, a)], jobs)
     den = denominator(lmin, coeffs)
     return coeffs, den, int(np.sum(den > fit.error_denominator(lmin)))
 
@@ -310,14 +316,8 @@ def _reference(point: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarra
 
 def rule_reference(points: np.ndarray, jobs: int) -> tuple[np.ndarray, np.ndarray]:
     """(P, 28, 3) m >= 0 reference coefficients and (P, 3) L_min (floored as :func:`denominator`)."""
-    rows = [tuple(float(v) for v in p) for p in points]
-    if jobs > 1:
-        with ProcessPoolExecutor(jobs) as pool:
-            results = list(pool.map(_reference, rows, chunksize=8))
-    else:
-        results = [_reference(p) for p in rows]
-    coeffs = np.stack([r[0] for r in results])
-    return coeffs, denominator(np.stack([r[1] for r in results]), coeffs)
+    coeffs, lmin = project_skies(_reference, [(float(z), float(t), float(a)) for z, t, a in points], jobs)
+    return coeffs, denominator(lmin, coeffs)
 
 
 def rule_errors(accuracy: str | hosek_frame.Accuracy, points: np.ndarray, truth: np.ndarray, den: np.ndarray,

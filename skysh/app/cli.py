@@ -15,6 +15,7 @@ Commands::
     skysh coeffs  ... [--sun] [--ground-albedo A|R,G,B]                         with the sun's disk and the ground
     skysh coeffs  ... --sun-light [--engine NAME]                               the sun as a directional light
     skysh export  --format c|glsl|hlsl|json|js --out FILE [--bands N] [--engine NAME]   tables + evaluation code
+    skysh coeffs|export|render ... --model hosek-wilkie [--albedo A|R,G,B]       the Hosek-Wilkie sky instead
     skysh view    [--out DIR] [--open] [--port N]                                the interactive viewer page
     skysh render  --sun-zenith DEG --sun-azimuth DEG --turbidity T --out FILE.png
     skysh fit     ...   skysh.app.fit_command (the tools extra brings cvxpy)
@@ -67,6 +68,10 @@ COEFF_FORMATS: tuple[str, ...] = ("table", "json", "csv", "glsl", "hlsl", "c", "
 
 ENGINE_FORMATS: tuple[str, ...] = ("table", "json", "csv", "snippet")
 """The formats that go with ``--engine`` (the constant arrays are skysh's own layout)."""
+
+MODELS: tuple[str, ...] = ("preetham", "hosek-wilkie")
+"""``--model``: skysh.options.MODELS, repeated here so that building the parser imports nothing
+(tests/test_code_health.py checks they agree)."""
 
 TOOL_COMMANDS: dict[str, str] = {"fit": "skysh.app.fit_command", "report": "error_report.py"}
 """Commands run by another module's ``main(argv)``: a module of the package (``skysh fit``, which works
@@ -146,7 +151,17 @@ def _add_sun(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--time", metavar="ISO8601", help="time with a UTC offset, e.g. 2024-06-21T12:00:00+02:00 or ...Z; the "
                        "sun must be above the horizon")
     parser.add_argument("--turbidity", type=real, required=True, metavar="T",
-                        help=f"atmospheric turbidity, {_turbidity_range()} (the fitted domain)")
+                        help=f"atmospheric turbidity, {_turbidity_range()} (the fitted domain; --model hosek-wilkie: "
+                        f"{_turbidity_range('hosek-wilkie')})")
+
+
+def _add_model(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--model", choices=MODELS, default="preetham", help="the sky: preetham (default; the fitted "
+                        "table, turbidity [2.5, 6]) or hosek-wilkie (Hosek and Wilkie 2012, projected per frame from its "
+                        "exact model; turbidity [1, 10], with --albedo)")
+    parser.add_argument("--albedo", type=_albedo, default=None, metavar="A|R,G,B", help="hosek-wilkie only: the ground "
+                        "albedo the sky's light sees (one number, or R,G,B for the sRGB dataset's channels), each in "
+                        "[0, 1]; default 0")
 
 
 def _add_lights(parser: argparse.ArgumentParser) -> None:
@@ -181,6 +196,8 @@ def _add_export_parser(commands: Any) -> None:
                         "chosen per call); deringing needs 3")
     export.add_argument("--c-real", choices=("double", "float"), default="double", help="C only: floating type of the tables and "
                         "arithmetic (default double)")
+    export.add_argument("--model", choices=MODELS, default="preetham", help="the sky: preetham (default) or hosek-wilkie "
+                        "(--format c or js: the dataset and the per-frame projection, skysh.export.hosek)")
     export.set_defaults(handler=_cmd_export)
 
 
@@ -204,6 +221,7 @@ def _add_coeffs_parser(commands: Any) -> None:
     coeffs.add_argument("--engine", metavar="NAME", default=None, help="engine-ready numbers for that engine's SH API (frame, "
                         "sign convention, pre-scaling; docs/engines.md): threejs, filament, filament-irradiance, unity, "
                         "unity-shader, babylon, unreal. Diffuse intent: the Gibbs filter off and deringing on by default")
+    _add_model(coeffs)
     _add_lights(coeffs)
     coeffs.add_argument("--sun-light", action="store_true", help="print the sun as a directional light instead: the unit vector "
                         "towards it (in the --up or --engine frame) and its RGB illuminance at normal incidence, lux (times "
@@ -244,6 +262,7 @@ def _add_render_parser(commands: Any) -> None:
                         f"[{RENDER_WIDTH_RANGE[0]}, {RENDER_WIDTH_RANGE[1]}]; default {DEFAULT_RENDER_WIDTH} (height W/2; "
                         "the three panels with their axes make an image about 1,660 pixels wide)")
     render.add_argument("--no-gibbs", action="store_true", help="skip the zonal sinc Gibbs filter")
+    _add_model(render)
     _add_lights(render)
     render.set_defaults(handler=_cmd_render)
 
@@ -307,8 +326,8 @@ def _sun_angles(args: argparse.Namespace) -> _Sun:
         zenith, azimuth = (float(v) for v in sun.position_unchecked(args.lat, args.lon, utc))
         if zenith > sun.HORIZON_ZENITH:
             raise _UsageError(f"--time {args.time}: the sun is below the horizon at --lat {number_text(args.lat)} --lon "
-                              f"{number_text(args.lon)} (sun zenith {math.degrees(zenith):.2f} deg > 90 deg): the Preetham "
-                              "sky model is not defined there")
+                              f"{number_text(args.lon)} (sun zenith {math.degrees(zenith):.2f} deg > 90 deg): the sky "
+                              "models are not defined there")
         return _Sun(math.degrees(zenith), math.degrees(azimuth), {"lat": args.lat, "lon": args.lon, "time": args.time})
     if args.sun_zenith is None:
         raise _UsageError("give --sun-zenith (and --sun-azimuth) or --lat/--lon/--time")
@@ -320,8 +339,12 @@ def _sun_angles(args: argparse.Namespace) -> _Sun:
     return _Sun(args.sun_zenith, 0.0 if args.sun_azimuth is None else args.sun_azimuth, {})
 
 
-def _turbidity_range() -> str:
-    """The fitted turbidity domain as help text, "[2.5, 6]" (:data:`skysh.domain.SKY`)."""
+def _turbidity_range(model: str = "preetham") -> str:
+    """A model's turbidity domain as help text: "[2.5, 6]" (:data:`skysh.domain.SKY`) or "[1, 10]" (Hosek-Wilkie)."""
+    if model == "hosek-wilkie":
+        from skysh.model import hosek
+
+        return "[{:g}, {:g}]".format(*hosek.TURBIDITY_RANGE)
     from skysh.domain import SKY
 
     return SKY.y.interval_text()
@@ -334,17 +357,37 @@ def _sun_zenith_range() -> str:
     return SKY.x.interval_text(degrees=True)
 
 
-def _check_turbidity(turbidity: float) -> None:
+def _check_turbidity(turbidity: float, model: str = "preetham") -> None:
     from skysh.domain import SKY
+    from skysh.model import hosek
 
-    low, high = SKY.y.interval
+    low, high = hosek.TURBIDITY_RANGE if model == "hosek-wilkie" else SKY.y.interval
     if not low <= turbidity <= high:
-        raise _UsageError(f"--turbidity must lie in {_turbidity_range()} (the fitted domain), got {number_text(turbidity)}")
+        domain = "the dataset's" if model == "hosek-wilkie" else "the fitted domain"
+        raise _UsageError(f"--turbidity must lie in {_turbidity_range(model)} ({domain}), got {number_text(turbidity)}")
+
+
+def _load(args: argparse.Namespace) -> Any:
+    """The runtime of ``--model`` (a loaded SkySH or HosekWilkieSH), after refusing what that model does not take."""
+    from skysh import SkySH
+
+    if args.model == "preetham":
+        if getattr(args, "albedo", None) is not None:
+            raise _UsageError("--albedo goes with --model hosek-wilkie (the Preetham sky has no ground albedo; "
+                              "--ground-albedo adds a lit ground)")
+        return SkySH.load()
+    for flag, given in (("--sun", getattr(args, "sun", False)), ("--sun-light", getattr(args, "sun_light", False)),
+                        ("--ground-albedo", getattr(args, "ground_albedo", 0.0) != 0.0)):
+        if given:
+            raise _UsageError(f"{flag} does not go with --model hosek-wilkie (its runtime gives the sky alone: the sun's "
+                              "disk and a lit ground come with the Preetham table)")
+    return SkySH.load(model="hosek-wilkie")
 
 
 def _check_bands(bands: int, sky: Any) -> None:
     if not 1 <= bands <= sky.bands:
-        raise _UsageError(f"--bands must lie in [1, {sky.bands}] (the coefficient file's bands), got {bands}")
+        source = "the coefficient file's" if sky.model == "preetham" else "the model's measured"
+        raise _UsageError(f"--bands must lie in [1, {sky.bands}] ({source} bands), got {bands}")
 
 
 def _check_colourspace(name: str | None, sky: Any) -> None:
@@ -382,25 +425,31 @@ def _scaled(before: NDArray[np.float64], scale: float, flag: str, fmt: str) -> N
 # --------------------------------------------------------------------------- #
 def _cmd_coeffs(args: argparse.Namespace) -> int:
     sun = _sun_angles(args)
-    _check_turbidity(args.turbidity)
-    from skysh import SkySH
+    _check_turbidity(args.turbidity, args.model)
     from skysh._version import __version__
     from skysh.options import Options
     from skysh.sh import basis as sh
 
-    sky = SkySH.load()
+    sky = _load(args)
     _check_coeffs_options(args, sky)
+    hosek = args.model == "hosek-wilkie"
     # the runtime's rules by intent (engines light diffusely: their 3-band presets take the certified irradiance table)
     o = Options.resolve(args.bands, args.gibbs, args.dering, args.irradiance, None, args.sun, args.ground_albedo,
-                        args.colourspace, args.engine, has_table=sky.has_irradiance_table, max_bands=sky.bands)
-    c = sky.coefficients(sun.zenith, args.turbidity, sun.azimuth, bands=o.bands, gibbs=o.gibbs, dering=o.dering,
-                         irradiance=o.irradiance, colourspace=o.colourspace, sun=o.sun,
-                         ground_albedo=o.ground_albedo or 0.0, irradiance_table=o.irradiance_table)
+                        args.colourspace, args.engine, has_table=not hosek and sky.has_irradiance_table,
+                        max_bands=sky.bands)
+    if hosek:
+        c = sky.coefficients(sun.zenith, args.turbidity, sun.azimuth, bands=o.bands, gibbs=o.gibbs, dering=o.dering,
+                             irradiance=o.irradiance, colourspace=o.colourspace, albedo=args.albedo or 0.0)
+    else:
+        c = sky.coefficients(sun.zenith, args.turbidity, sun.azimuth, bands=o.bands, gibbs=o.gibbs, dering=o.dering,
+                             irradiance=o.irradiance, colourspace=o.colourspace, sun=o.sun,
+                             ground_albedo=o.ground_albedo or 0.0, irradiance_table=o.irradiance_table)
     if args.up == "y":
         c = sh.to_y_up(c)
     c, scale, units = _coeffs_scaled(c, args)
     info: dict[str, Any] = {  # sun degrees as given (or computed from the place and time)
-        "skysh_version": __version__, "quantity": "irradiance" if args.irradiance else "radiance", "bands": args.bands,
+        "skysh_version": __version__, "model": args.model, **({"albedo": args.albedo or 0.0} if hosek else {}),
+        "quantity": "irradiance" if args.irradiance else "radiance", "bands": args.bands,
         "sun_zenith_deg": sun.zenith_deg, "sun_azimuth_deg": sun.azimuth_deg, "sun_zenith_rad": sun.zenith,
         "sun_azimuth_rad": sun.azimuth, "turbidity": args.turbidity, "gibbs": o.gibbs, "dering": o.dering, "sun": args.sun,
         "ground_albedo": args.ground_albedo, "up": args.up, "units": units, "scale": scale,
@@ -501,6 +550,8 @@ def _write(outputs: dict[Path, bytes], flag: str = "--out") -> None:
 
 
 def _cmd_export(args: argparse.Namespace) -> int:
+    if args.model == "hosek-wilkie":
+        return _export_hosek(args)
     from skysh import SkySH
     from skysh.export.c_like import export_source
 
@@ -530,17 +581,41 @@ def _cmd_export(args: argparse.Namespace) -> int:
     return 0
 
 
+def _export_hosek(args: argparse.Namespace) -> int:
+    """``skysh export --model hosek-wilkie``: C or JavaScript (skysh.export.hosek), written whole."""
+    from skysh.export import hosek as export_hosek
+
+    if args.engine is not None:
+        raise _UsageError("--engine does not go with --model hosek-wilkie (its exports give skysh's own convention)")
+    if args.bands is not None and not 1 <= args.bands <= 7:
+        raise _UsageError(f"--bands must lie in [1, 7], got {args.bands}")
+    from skysh.export.js import declarations_path
+
+    stdout = str(args.out) == "-"
+    paths = [] if stdout else [_output(args.out)]  # checked before the source is written
+    if args.format == "js" and not stdout:
+        paths.append(_output(declarations_path(args.out), "--out (its TypeScript declarations)"))
+    text = export_hosek.export_source(args.format, bands=args.bands, real=args.c_real)  # refuses other formats
+    if stdout:
+        sys.stdout.write(text)
+        return 0
+    texts = [text] + ([export_hosek.declarations(args.bands)] if args.format == "js" else [])
+    _write({path: content.encode("utf-8") for path, content in zip(paths, texts)})
+    print(f"wrote {' and '.join(map(str, paths))} ({args.format}, hosek-wilkie, {len(text) / 1024:.1f} KiB)")
+    return 0
+
+
 def _cmd_render(args: argparse.Namespace) -> int:
     sun = _sun_angles(args)
-    _check_turbidity(args.turbidity)
-    from skysh import SkySH
+    _check_turbidity(args.turbidity, args.model)
     from skysh.app.render import render_image, write_png
 
     out = _output(args.out)
-    sky = SkySH.load()
+    sky = _load(args)
     _check_bands(args.bands, sky)
     image = render_image(sky, sun.zenith, args.turbidity, sun.azimuth, bands=args.bands, width=args.width,
-                         gibbs=not args.no_gibbs, sun=args.sun, ground_albedo=args.ground_albedo)
+                         gibbs=not args.no_gibbs, sun=args.sun, ground_albedo=args.ground_albedo,
+                         albedo=args.albedo or 0.0)
     try:
         write_png(out, image)  # whole or not at all (skysh.files)
     except OSError as error:

@@ -144,7 +144,11 @@ def format_coefficients(coefficients: NDArray[np.float64], fmt: str, info: dict[
 def _coefficients_context(info: dict[str, Any]) -> list[str]:
     """The header lines of the commented formats: what was computed, the units and colourspace, the convention."""
     degrees = number_text if "place" not in info else (lambda value: f"{value:.6g}")  # echo what the user typed
-    summary = (f"skysh {info['skysh_version']}: {info['quantity']} SH of the Preetham sky, {plural(info['bands'], 'band')}; "
+    hosek = info.get("model") == "hosek-wilkie"
+    albedo = info.get("albedo", 0.0)
+    albedo_text = ", ".join(map(number_text, albedo)) if isinstance(albedo, (tuple, list)) else number_text(albedo)
+    sky = f"the Hosek-Wilkie sky (albedo {albedo_text})" if hosek else "the Preetham sky"
+    summary = (f"skysh {info['skysh_version']}: {info['quantity']} SH of {sky}, {plural(info['bands'], 'band')}; "
                f"sun zenith {degrees(info['sun_zenith_deg'])} deg, azimuth {degrees(info['sun_azimuth_deg'])} deg, "
                f"turbidity {number_text(info['turbidity'])}; {settings_text(info)}")
     return [summary, f"units: {info['units']}; colourspace: {info['colourspace']} (linear)", info["convention"]]

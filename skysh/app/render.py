@@ -8,7 +8,8 @@ Pictures of the sky and its SH lighting, as PNG, without plotting libraries
     and ``ground_albedo`` the scene gains the sun's disk and a Lambertian
     ground (:func:`true_scene`), in all three panels.
 -   :func:`true_scene`: the radiance of sky + sun's disk + ground in given
-    directions, from the models (not the fit).
+    directions, from the models (not the fit); :func:`true_hosek_sky` the
+    Hosek-Wilkie sky's (``render_image`` of ``SkySH.load(model="hosek-wilkie")``).
 -   :func:`latlong_dirs`: the view directions of a latitude-longitude panel.
 -   :func:`tone_map`: exposure, Reinhard's operator and the sRGB transfer
     function, linear RGB -> 8-bit sRGB.
@@ -48,7 +49,7 @@ from numpy.typing import ArrayLike, NDArray
 from skysh import files
 from skysh.checks import as_float_array, check_count, check_flag, check_scalar, short_repr
 from skysh.lighting.lights import check_albedo
-from skysh.model import ground, preetham, solar
+from skysh.model import ground, hosek, preetham, solar
 from skysh.runtime import SkySH
 from skysh.sh import basis as sh
 
@@ -148,6 +149,21 @@ def true_scene(dirs: NDArray[np.float64], sun_zenith: float, turbidity: float, s
     if sun and sun_pixels is not None and sun_pixels.any():
         area = np.broadcast_to(pixel_solid_angle, sun_pixels.shape)[sun_pixels]
         out[sun_pixels] += e_sun / float(area.sum())
+    return out
+
+
+def true_hosek_sky(dirs: NDArray[np.float64], sun_zenith: float, turbidity: float, sun_azimuth: float,
+                   albedo: ArrayLike = 0.0) -> NDArray[np.float64]:
+    """
+    Radiance (cd/m^2, linear sRGB) of the Hosek-Wilkie sky in the directions ``dirs`` (..., 3), from the model
+    (:func:`skysh.model.hosek.radiance`, the RGB dataset), zero below the horizon; ``albedo`` a number or an RGB
+    triple in [0, 1] (each channel at its own albedo, as :class:`skysh.hosek_runtime.HosekWilkieSH`).
+    """
+    a = np.broadcast_to(as_float_array(albedo, "albedo"), (3,))
+    out = np.empty(dirs.shape)
+    for value in sorted(set(a.tolist())):  # one model evaluation per distinct albedo
+        channels = a == value
+        out[..., channels] = hosek.radiance(dirs, sun_zenith, sun_azimuth, turbidity, value)[..., channels]
     return out
 
 
@@ -270,17 +286,18 @@ def _ring(image: NDArray[np.uint8], cx: float, cy: float, radius: float, box: tu
 
 def render_image(sky: SkySH, sun_zenith: float, turbidity: float, sun_azimuth: float = 0.0, bands: int = 3,
                  width: int = DEFAULT_PANEL_WIDTH, gibbs: bool = True, sun: bool = False,
-                 ground_albedo: ArrayLike = 0.0) -> NDArray[np.uint8]:
+                 ground_albedo: ArrayLike = 0.0, albedo: ArrayLike = 0.0) -> NDArray[np.uint8]:
     """
     The sky, its SH reconstruction and the SH irradiance, side by side, labelled.
 
     Parameters
     ----------
     sky
-        A loaded :class:`skysh.SkySH`.
+        A loaded :class:`skysh.SkySH`, or ``SkySH.load(model="hosek-wilkie")`` (the true sky
+        is then :func:`true_hosek_sky`; no sun or ground).
     sun_zenith, turbidity, sun_azimuth
-        Radians in [0, pi/2], turbidity in [2.5, 6], radians (the runtime's
-        domain); single numbers.
+        Radians in [0, pi/2], turbidity in [2.5, 6] ([1, 10] for Hosek-Wilkie), radians (the
+        runtime's domain); single numbers.
     bands
         SH bands of the reconstruction and the irradiance, [1, the file's bands].
     width
@@ -295,6 +312,8 @@ def render_image(sky: SkySH, sun_zenith: float, turbidity: float, sun_azimuth: f
         As :meth:`skysh.SkySH.coefficients`: the sun's disk and a Lambertian
         ground, in the true scene (:func:`true_scene`), the reconstruction and
         the irradiance alike.
+    albedo
+        Hosek-Wilkie only: the ground albedo its sky sees (a number or RGB in [0, 1]).
 
     Returns
     -------
@@ -318,14 +337,20 @@ def render_image(sky: SkySH, sun_zenith: float, turbidity: float, sun_azimuth: f
     sun_zenith = check_scalar(sun_zenith, "sun_zenith", unit="rad")
     turbidity = check_scalar(turbidity, "turbidity")
     sun_azimuth = check_scalar(sun_azimuth, "sun_azimuth", unit="rad")
-    lights = {"sun": check_flag(sun, "sun"), "ground_albedo": ground_albedo}
+    hosek_sky = getattr(sky, "model", "preetham") == "hosek-wilkie"
+    lights = {"albedo": albedo} if hosek_sky else {"sun": check_flag(sun, "sun"), "ground_albedo": ground_albedo}
     panels, exposure = _panels(sky, sun_zenith, turbidity, sun_azimuth, bands, width, gibbs, lights)
-    albedo = np.atleast_1d(np.asarray(ground_albedo, dtype=np.float64))
-    scene = (", SUN" if lights["sun"] else "") + (
-        f", GROUND ALBEDO {' '.join(f'{a:g}' for a in albedo)}" if albedo.any() else "")
-    title = (f"SUN ZENITH {math.degrees(sun_zenith):.1f} DEG, AZIMUTH {math.degrees(sun_azimuth):.1f} DEG, "
-             f"TURBIDITY {turbidity:g}, {bands} BAND{'' if bands == 1 else 'S'}{'' if gibbs else ', NO GIBBS'}{scene}")
+    ground_text = np.atleast_1d(np.asarray(ground_albedo, dtype=np.float64))
+    scene = (", SUN" if lights.get("sun") else "") + (
+        f", GROUND ALBEDO {' '.join(f'{a:g}' for a in ground_text)}" if ground_text.any() else "")
+    if hosek_sky:
+        scene = ", ALBEDO " + " ".join(f"{a:g}" for a in np.atleast_1d(np.asarray(albedo, dtype=np.float64)))
+    title = (("HOSEK-WILKIE, " if hosek_sky else "") + f"SUN ZENITH {math.degrees(sun_zenith):.1f} DEG, AZIMUTH "
+             f"{math.degrees(sun_azimuth):.1f} DEG, TURBIDITY {turbidity:g}, {bands} BAND{'' if bands == 1 else 'S'}"
+             f"{'' if gibbs else ', NO GIBBS'}{scene}")
     labels = _LABELS if scene == "" else (_LABELS[0], ("SKY, SUN, GROUND",) + _LABELS[1][1:])
+    if hosek_sky:
+        labels = (_LABELS[0], ("HOSEK-WILKIE SKY",) + _LABELS[1][1:])
     return _compose(panels, exposure, title, width, sun_zenith, sun_azimuth, labels)
 
 
@@ -337,8 +362,11 @@ def _panels(sky: SkySH, sun_zenith: float, turbidity: float, sun_azimuth: float,
     sin_theta = np.sin(np.arccos(np.clip(dirs[..., 2], -1.0, 1.0)))
     disk = _sun_pixels(dirs, sun_zenith, sun_azimuth)
     pixel = sin_theta * (math.pi / (width // 2)) * (2.0 * math.pi / width)  # solid angle of each pixel, sr
-    truth = true_scene(dirs, sun_zenith, turbidity, sun_azimuth, sky.colourspace, sun_pixels=disk,
-                       pixel_solid_angle=pixel, **lights)
+    if "albedo" in lights:  # Hosek-Wilkie: the sky alone
+        truth = true_hosek_sky(dirs, sun_zenith, turbidity, sun_azimuth, lights["albedo"])
+    else:
+        truth = true_scene(dirs, sun_zenith, turbidity, sun_azimuth, sky.colourspace, sun_pixels=disk,
+                           pixel_solid_angle=pixel, **lights)
     reconstruction = sh.evaluate(coefficients, dirs)
     irradiance = sh.evaluate(sky.coefficients(sun_zenith, turbidity, sun_azimuth, bands=bands, irradiance=True,
                                               **lights), dirs)

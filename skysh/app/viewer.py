@@ -14,24 +14,41 @@ The interactive viewer page: the sky, its SH reconstruction and the lighting, li
 
 The page (``skysh/app/web/``) is WebGL2 and plain JavaScript: no framework, no CDN,
 no request beyond its own files (its Content-Security-Policy forbids any other).
-Everything it computes comes from skysh, generated when the files are written:
+It shows one of two skies, switched on the page: the Preetham sky (the coefficient file's
+runtime) or the Hosek-Wilkie sky (its per-frame runtime, sky only: no sun disk, black below
+the horizon). Everything it computes comes from skysh, generated when the files are written:
 
--   The per-frame coefficients come from the JavaScript runtime of
-    :func:`skysh.export.c_like.export_source` (``"js"``, every band the coefficient file
-    holds), with the Python runtime's defaults (the certified irradiance table for
-    3-band irradiance and engine presets; a box gives the old pipeline,
-    ``irradiance_table=False``); the scene's irradiance is the runtime's
-    ``irradiance: true`` call, not A_l times the radiance shown. The runtime is
-    inlined into ``index.html`` as a ``<script type="module">``:
-    Chromium refuses module scripts loaded from ``file://`` (CORS), so the page
-    loads no module file. Its classic scripts (``sky.js``, ``shaders.js``,
-    ``viewer.js``) load from ``file://`` as from a server.
--   The true sky (Preetham 1999, appendix), evaluated per pixel in the fragment
+-   The per-frame coefficients come from two JavaScript runtimes: the Preetham sky's from
+    :func:`skysh.export.c_like.export_source` (``"js"``, every band the coefficient file holds),
+    with the Python runtime's defaults (the certified irradiance table for 3-band irradiance
+    and engine presets; a box gives the old pipeline, ``irradiance_table=False``); the
+    Hosek-Wilkie sky's from :func:`skysh.export.hosek.export_source` (``"js"``, as many bands,
+    at most 7), the same numbers as ``SkySH.load(model="hosek-wilkie").coefficients``, at the
+    page's grey ground albedo (one slider; the runtime also takes R, G, B). The scene's
+    irradiance is the runtime's ``irradiance: true`` call, not A_l times the radiance shown.
+    Each runtime is inlined into ``index.html`` as a ``<script type="module">`` of its own
+    (the two modules' top-level names would clash in one) that hands its exports to
+    ``viewer.js`` (``skyshViewer.register``; the page starts once both are in), each script
+    allowed by its hash in the Content-Security-Policy: Chromium refuses module scripts loaded
+    from ``file://`` (CORS), so the page loads no module file. Its classic scripts
+    (``sky.js``, ``shaders.js``, ``viewer.js``) load from ``file://`` as from a server.
+-   The controls follow the model: the turbidity slider spans the runtime's domain
+    (Preetham [2.5, 6], Hosek-Wilkie [1, 10]; the value is clamped into it on a switch, so a
+    value inside both is kept); the albedo slider shows for Hosek-Wilkie only; the engine
+    presets and the certified-table box are off for it, with a note (its module has no engine
+    map and there is no table; its deringing is available at every band count).
+-   The true Preetham sky (1999, appendix), evaluated per pixel in the fragment
     shader and in double precision on the CPU, takes its constants from
     :mod:`skysh.model.preetham`: the Perez tables, the zenith-chromaticity matrices,
     and the XYZ -> RGB matrix of the coefficient file's colourspace; the zenith luminance
     is the exported JavaScript runtime's own (``zenithLuminance``, written once in
     ``skysh/export/templates/js_module.mjs``), handed to the page with the runtime.
+-   The true Hosek-Wilkie sky (2012, eq. 9, linear sRGB: the model's RGB dataset) is drawn per
+    pixel in the fragment shader from the parameters A..I and L_M x efficacy of the module's
+    ``configuration()``, uniforms set per frame (L_M times the efficacy in double, then
+    rounded once), and :data:`skysh.model.hosek.HORIZON_OFFSET` written into the shader from
+    the page's configuration; zero below the horizon. On the CPU (the error numbers) it is
+    the module's own ``radiance()``, in double.
 -   The SH basis uses :mod:`skysh.sh.basis`'s recurrence constants; the tone mapping
     :mod:`skysh.app.render`'s key.
 -   The engine snippets are :func:`skysh.engines.presets.snippet` turned into templates
@@ -40,11 +57,12 @@ Everything it computes comes from skysh, generated when the files are written:
     every number below 1e-12 of the DC term (the largest |coefficient of row 0| over the
     channels, of the radiance an engine converts) as 0, and -0 as 0: rounding noise of the
     rotation to the sun's azimuth (``sky.js``'s ``NOISE_FLOOR``; the rule of
-    :func:`skysh.engines.presets.snippet`).
+    :func:`skysh.engines.presets.snippet`). Its JSON names the ``model`` (as ``skysh coeffs``
+    does) and, for Hosek-Wilkie, the ``albedo``.
 
 The page's error number is the relative RMS difference of the reconstructed
-radiance from the true sky over the upper hemisphere (all three channels),
-computed on the CPU in double precision by a product rule (:data:`ERROR_RULE_MU`
+radiance from the true sky (of the model shown) over the upper hemisphere (all three
+channels), computed on the CPU in double precision by a product rule (:data:`ERROR_RULE_MU`
 Gauss-Legendre nodes in cos(theta) times :data:`ERROR_RULE_PHI` azimuths); the
 ringing number is the RMS of the reconstruction below the horizon over the
 same norm of the true sky above it.
@@ -53,6 +71,8 @@ References
 ----------
 -   Preetham, A. J., Shirley, P., Smits, B. (1999). A Practical Analytic Model for
     Daylight. SIGGRAPH 1999, appendix.
+-   Hosek, L., Wilkie, A. (2012). An Analytic Model for Full Spectral Sky-Dome Radiance.
+    ACM Trans. Graph. 31(4), 95: eq. (9), section 5.
 -   Habel, R., Mustata, B., Wimmer, M. (2008), seed 004: eqs. (1), (4), (5).
 -   Ramamoorthi, R., Hanrahan, P. (2001): the clamped-cosine factors A_l.
 """
@@ -82,10 +102,11 @@ from skysh import files
 from skysh._version import __version__
 from skysh.app import render
 from skysh.engines import presets as engines
+from skysh.export import hosek as hosek_export
 from skysh.export.c_like import export_source
 from skysh.lighting import sunlight
 from skysh.literals import double_literal, suffixed_literal
-from skysh.model import preetham
+from skysh.model import hosek, preetham
 from skysh.runtime import SkySH
 from skysh.sh import basis as sh
 
@@ -140,9 +161,17 @@ ERROR_RULE_PHI: int = 48
 _SNIPPET_SEED: int = 16
 """Seed of the random radiance coefficients the snippet templates are read from (any seed works)."""
 
-_CSP: str = ("default-src 'none'; script-src 'self' '$script_hash'; style-src 'self'; img-src 'self' data:; "
+_CSP: str = ("default-src 'none'; script-src 'self' $script_hashes; style-src 'self'; img-src 'self' data:; "
              "connect-src 'none'; base-uri 'none'; form-action 'none'")
-"""The page's Content-Security-Policy: its own files and its one inline module script, nothing else."""
+"""The page's Content-Security-Policy: its own files and its two inline module scripts, nothing else."""
+
+_HANDOVER: dict[str, str] = {
+    "preetham": "coefficients, engineLayout, ENGINES, MAX_BANDS, SKYSH_VERSION, SUN_ZENITH_DOMAIN, TURBIDITY_DOMAIN, "
+                "zenithLuminance",
+    "hosek-wilkie": "createSky, configuration, radiance, MAX_BANDS, SKYSH_VERSION, SUN_ZENITH_DOMAIN, TURBIDITY_DOMAIN, "
+                    "ALBEDO_DOMAIN",
+}
+"""What each inlined runtime (model name -> its exports) hands to the viewer (viewer.js's ``skyshViewer.register``)."""
 
 
 # --------------------------------------------------------------------------- #
@@ -276,6 +305,7 @@ def page_config(sky: SkySH) -> dict[str, Any]:
         "xyzToRgb": _rgb_from_xyz(sky).tolist(),
         "shRecurrence": {"diag": recurrence.diag.tolist(), "a": recurrence.a.tolist(), "b": recurrence.b.tolist()},
         "lobe": sh.cosine_lobe(sky.bands).tolist(),
+        "hosekHorizonOffset": hosek.HORIZON_OFFSET,
         "keyValue": render.KEY_VALUE,
         "errorRule": _error_rule(),
         "engines": list(engines.ENGINES),
@@ -302,16 +332,20 @@ def page_files(sky: SkySH | None = None) -> dict[str, bytes]:
         ``{name: content}`` for every name of :data:`PAGE_FILES`.
     """
     sky = SkySH.load() if sky is None else sky
-    module = export_source(sky, "js", bands=None)
-    if "</script" in module.lower() or "<!--" in module:  # text that would end the element early
-        raise RuntimeError("the JavaScript runtime contains '</script' or '<!--' and cannot be inlined")
-    runtime = module + ("\n// The viewer (viewer.js, a classic script run before this module) takes the runtime from here.\n"
-                        "globalThis.skyshViewer.start({ coefficients, engineLayout, ENGINES, MAX_BANDS, SKYSH_VERSION,"
-                        " SUN_ZENITH_DOMAIN, TURBIDITY_DOMAIN, zenithLuminance });\n")
-    digest = base64.b64encode(hashlib.sha256(runtime.encode("utf-8")).digest()).decode("ascii")
+    modules = {"preetham": export_source(sky, "js", bands=None),
+               "hosek-wilkie": hosek_export.export_source("js", bands=min(sky.bands, hosek_export.MAX_EXPORT_BANDS))}
+    scripts = {}
+    for model, module in modules.items():
+        if "</script" in module.lower() or "<!--" in module:  # text that would end the element early
+            raise RuntimeError(f"the JavaScript runtime of {model} contains '</script' or '<!--' and cannot be inlined")
+        scripts[model] = module + ("\n// The viewer (viewer.js, a classic script run before this module) takes the runtime from "
+                                   f"here.\nglobalThis.skyshViewer.register({json.dumps(model)}, {{ {_HANDOVER[model]} }});\n")
+    digests = (base64.b64encode(hashlib.sha256(text.encode("utf-8")).digest()).decode("ascii") for text in scripts.values())
+    hashes = " ".join(f"'sha256-{digest}'" for digest in digests)
     config = json.dumps(page_config(sky), separators=(",", ":"), allow_nan=False)
     index = Template((WEB_DIR / "index.html").read_text(encoding="utf-8")).substitute(
-        csp=Template(_CSP).substitute(script_hash=f"sha256-{digest}"), runtime=runtime, version=__version__,
+        csp=Template(_CSP).substitute(script_hashes=hashes), runtime=scripts["preetham"],
+        hosek_runtime=scripts["hosek-wilkie"], version=__version__,
         config=config.replace("<", "\\u003c"))  # every '<' escaped: nothing can end the <script> element early
     return {"index.html": index.encode("utf-8"), **{name: (WEB_DIR / name).read_bytes() for name in _STATIC_SOURCES}}
 

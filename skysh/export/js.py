@@ -11,7 +11,8 @@ The JavaScript and JSON exports
 -   :func:`declarations`, :func:`declarations_path`: the TypeScript declarations of that
     module and the file name TypeScript finds them under (``sky_sh.d.mts`` beside ``sky_sh.mjs``).
 -   :func:`json_source`: the tables and the algorithm in words, for any other language.
--   :data:`MODULE_TEMPLATE`, :data:`DECLARATIONS_TEMPLATE`, :data:`JSON_TEMPLATE`: their source files.
+-   :data:`MODULE_TEMPLATE`, :data:`DERING_TEMPLATE`, :data:`DECLARATIONS_TEMPLATE`, :data:`JSON_TEMPLATE`: their
+    source files.
 
 The module and its declarations are real source files, ``skysh/export/templates/js_module.mjs``
 and ``js_module.d.mts`` (:mod:`skysh.export.template`): every statement is fixed text there,
@@ -78,6 +79,10 @@ __all__ = ["module_source", "module_data", "declarations", "declarations_path", 
 
 MODULE_TEMPLATE: str = "js_module.mjs"
 """The ES module's source (:data:`skysh.export.template.TEMPLATE_DIR`): fixed code, header words and ``{{DATA}}``."""
+
+DERING_TEMPLATE: str = "js_dering.mjs"
+"""The deringing section of the ES module (fixed code reading ``MAX_BANDS`` and ``DATA.dering``), its ``{{DERING}}``;
+the Hosek-Wilkie module (:mod:`skysh.export.hosek`) embeds the same file."""
 
 DECLARATIONS_TEMPLATE: str = "js_module.d.mts"
 """The TypeScript declarations' source: its words (version, bands, engine names, turbidity domain) are holes."""
@@ -234,7 +239,7 @@ def module_source(sky: runtime.SkySH, bands: int | None = None) -> str:
     data = _module_data(tables)
     names = ", ".join(json.dumps(name) for name, _ in data["engines"]) or "none in this module"
     return template.fill(
-        MODULE_TEMPLATE, **_words(sky, tables), DATA=_data_text(data),
+        MODULE_TEMPLATE, **_words(sky, tables), DATA=_data_text(data), DERING=template.text(DERING_TEMPLATE),
         ENGINE_LIST=textwrap.fill(names, width=90, initial_indent=" " * 60, subsequent_indent=" *               ").strip(),
         SUN_ZENITH_DOMAIN=interval_text(*tables.sun_zenith_domain, pi=True),
     )

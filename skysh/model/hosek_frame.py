@@ -4,6 +4,7 @@ Hosek-Wilkie sky SH per frame: the exact model on a small sun-adapted rule
 
 -   :func:`coefficients`: the sky's radiance SH, (..., N*N, 3) cd/m^2, scalar or batched.
 -   :data:`ACCURACIES`, :class:`Accuracy`: the rules offered ("fast", "default", "fine").
+-   :func:`basis_rows`: the SH basis at azimuth 0 as Chebyshev sums in cos(k theta) (the exports' data).
 -   :func:`rule`: the rule of one sun position (ring zenith angles and weights, azimuth
     nodes and weights), for inspection and studies.
 
@@ -71,7 +72,7 @@ from skysh.checks import check_bands, check_choice, check_range, check_size
 from skysh.model import hosek, hosek_data, preetham
 from skysh.sh import basis as sh
 
-__all__ = ["ACCURACIES", "Accuracy", "coefficients", "rule"]
+__all__ = ["ACCURACIES", "Accuracy", "basis_rows", "coefficients", "rule"]
 
 
 @dataclass(frozen=True)
@@ -193,7 +194,7 @@ def _rings(layout: _Layout, ts: NDArray) -> tuple[NDArray, NDArray, NDArray, NDA
 
 
 @cache
-def _chebyshev_rows(bands: int) -> tuple[NDArray[np.float64], NDArray[np.intp], NDArray[np.bool_]]:
+def basis_rows(bands: int) -> tuple[NDArray[np.float64], NDArray[np.intp], NDArray[np.bool_]]:
     """(bands, N*N) Chebyshev coefficients c[k, i] with Y_(l,|m|)(theta, phi = 0) = sin^|m|(theta) sum_k c[k, i]
     cos(k theta) (the m < 0 columns repeat the m > 0 ones: the rotation picks cos or sin), the |m| of each
     index and whether m < 0; computed once from skysh's basis."""
@@ -232,9 +233,13 @@ def _azimuth_matrix(nodes: int, bands: int) -> NDArray[np.float64]:
 def _project(layout: _Layout, ts: NDArray, t: NDArray, a: NDArray, phi: NDArray, bands: int,
              kind: str) -> NDArray[np.float64]:
     """(G, N*N, C) SH of the model's channels (dataset units), turned by the azimuths ``phi``, for suns of one
-    layout: ts, t, a, phi (G,), checked."""
+    layout: ts, t, phi (G,), a (G,) or (G, 3) per channel, checked."""
     theta, ct, sct, w = _rings(layout, ts)
-    p = hosek._interpolate(_parameter_table(kind), ts, t, a)  # (G, C, 10)
+    if a.ndim == 1:
+        p = hosek._interpolate(_parameter_table(kind), ts, t, a)  # (G, C, 10)
+    else:  # one albedo per channel, (G, C): the dataset is linear in albedo between its two tables
+        ends = [hosek._interpolate(_parameter_table(kind), ts, t, np.full_like(ts, e)) for e in (0.0, 1.0)]
+        p = (1.0 - a[..., None]) * ends[0] + a[..., None] * ends[1]
     pa, pb, pc, pd, pe, pf, pg, pi_, ph, lm = (v[:, None, :] for v in np.moveaxis(p, -1, 0))  # (G, 1, C)
     # 1 - cos gamma = 2 sin^2((theta - ts) / 2) + 2 sin theta sin ts sin^2(phi / 2): accurate near the sun
     hav = np.sin(0.5 * (theta - ts[:, None])) ** 2
@@ -247,7 +252,7 @@ def _project(layout: _Layout, ts: NDArray, t: NDArray, a: NDArray, phi: NDArray,
     by_m += pg[..., None] * (chi @ sums) + pf[..., None] * ((cg * cg) @ sums)
     by_m[..., 0] += 2.0 * math.pi * (pc + pi_ * sct[..., None])  # the terms constant in the azimuth: m = 0 only
     radial = (1.0 + pa * np.exp(pb / (ct[..., None] + hosek.HORIZON_OFFSET))) * lm * w[..., None]  # (G, R, C)
-    rows, m, negative = _chebyshev_rows(bands)
+    rows, m, negative = basis_rows(bands)
     y = (np.cos(theta[..., None] * np.arange(bands)) @ rows) * np.sin(theta)[..., None] ** m  # (G, R, N*N)
     turn = np.fmod(phi, 2.0 * math.pi)[:, None] * m  # Habel eq. 4 for coefficients whose m < 0 vanish
     factor = np.where(negative, np.sin(turn), np.cos(turn))  # (G, N*N)
@@ -259,24 +264,31 @@ def _accuracy(accuracy: str | Accuracy) -> Accuracy:
     return accuracy if isinstance(accuracy, Accuracy) else ACCURACIES[check_choice(accuracy, "accuracy", tuple(ACCURACIES))]
 
 
-def _check(sun_zenith: ArrayLike, turbidity: ArrayLike, albedo: ArrayLike,
-           sun_azimuth: ArrayLike) -> tuple[NDArray, NDArray, NDArray, NDArray]:
-    """The four parameters checked and broadcast; Python numbers in range take a path without numpy's checks."""
+def _check(sun_zenith: ArrayLike, turbidity: ArrayLike, albedo: ArrayLike, sun_azimuth: ArrayLike,
+           per_channel: bool) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    """The four parameters checked and broadcast (the albedo's channel axis kept apart with ``per_channel``);
+    Python numbers in range take a path without numpy's checks."""
     values = (sun_zenith, turbidity, albedo, sun_azimuth)
     ranges = (hosek.SUN_ZENITH_RANGE, hosek.TURBIDITY_RANGE, hosek.ALBEDO_RANGE, (-_FINITE, _FINITE))
-    if all(type(v) in (float, int) and r[0] <= cast(float, v) <= r[1] for v, r in zip(values, ranges)):  # not NaN
+    if not per_channel and all(type(v) in (float, int) and r[0] <= cast(float, v) <= r[1]
+                               for v, r in zip(values, ranges)):  # not NaN
         return tuple(np.array(float(cast(float, v))) for v in values)  # type: ignore[return-value]
     ts = check_range(sun_zenith, "sun_zenith", *hosek.SUN_ZENITH_RANGE, unit="rad")
     t = check_range(turbidity, "turbidity", *hosek.TURBIDITY_RANGE)
     a = check_range(albedo, "albedo", *hosek.ALBEDO_RANGE)
     phi = check_range(sun_azimuth, "sun_azimuth", -math.inf, math.inf, unit="rad")
-    shape = preetham._broadcast_shape("sun_zenith, turbidity, albedo and sun_azimuth", ts.shape, t.shape, a.shape,
+    if per_channel and (a.ndim == 0 or a.shape[-1] != 3):
+        raise ValueError(f"albedo must end in an axis of 3 (R, G, B) with per_channel=True, got shape {a.shape}")
+    a_shape = a.shape[:-1] if per_channel else a.shape
+    shape = preetham._broadcast_shape("sun_zenith, turbidity, albedo and sun_azimuth", ts.shape, t.shape, a_shape,
                                       phi.shape)
-    return tuple(np.broadcast_to(v, shape) for v in (ts, t, a, phi))  # type: ignore[return-value]
+    a = np.broadcast_to(a, shape + a.shape[len(a_shape):])
+    return np.broadcast_to(ts, shape), np.broadcast_to(t, shape), a, np.broadcast_to(phi, shape)
 
 
 def coefficients(sun_zenith: ArrayLike, turbidity: ArrayLike, albedo: ArrayLike, sun_azimuth: ArrayLike = 0.0,
-                 bands: int = 3, colourspace: str = "sRGB", accuracy: str | Accuracy = "default") -> NDArray[np.float64]:
+                 bands: int = 3, colourspace: str = "sRGB", accuracy: str | Accuracy = "default",
+                 per_channel: bool = False) -> NDArray[np.float64]:
     """
     SH of the Hosek-Wilkie sky's radiance, from the exact model on a sun-adapted rule.
 
@@ -288,7 +300,8 @@ def coefficients(sun_zenith: ArrayLike, turbidity: ArrayLike, albedo: ArrayLike,
         [1, 10].
     albedo
         Ground albedo, [0, 1]: one grey value per sky, as :mod:`skysh.model.hosek` (whose
-        dataset interpolation and reference take a scalar albedo).
+        dataset interpolation and reference take a scalar albedo); with ``per_channel``, one
+        per RGB channel on a last axis of 3.
     sun_azimuth
         Radians, any finite value (from +X towards +Y).
     bands
@@ -299,6 +312,11 @@ def coefficients(sun_zenith: ArrayLike, turbidity: ArrayLike, albedo: ArrayLike,
         linearly (the route of :func:`skysh.model.hosek.radiance`).
     accuracy
         A key of :data:`ACCURACIES` or an :class:`Accuracy`.
+    per_channel
+        ``albedo``'s last axis holds (R, G, B): each channel of the RGB dataset takes its
+        parameters at its own albedo, ``(1 - a_c) P_c(0) + a_c P_c(1)`` (the dataset is linear in
+        albedo between its two tables; the channels are independent). "sRGB" only: the spectral
+        channels take one grey albedo.
 
     Returns
     -------
@@ -331,10 +349,13 @@ def coefficients(sun_zenith: ArrayLike, turbidity: ArrayLike, albedo: ArrayLike,
     acc = _accuracy(accuracy)
     bands = check_bands(bands, high=MAX_BANDS)
     kind = hosek._resolve("auto", colourspace)
-    ts, t, a, phi = _check(sun_zenith, turbidity, albedo, sun_azimuth)
+    if per_channel and kind != "rgb":
+        raise ValueError(f"per_channel=True needs colourspace 'sRGB' (the RGB dataset), got {colourspace!r}: the "
+                         "spectral channels take one grey albedo")
+    ts, t, a, phi = _check(sun_zenith, turbidity, albedo, sun_azimuth, per_channel)
     channels = 3 if kind == "rgb" else hosek.WAVELENGTHS.size
     check_size(ts.size * bands * bands * channels, "sun_zenith", "the coefficients")
-    flat = [v.ravel() for v in (ts, t, a, phi)]
+    flat = [v.reshape(-1, *v.shape[ts.ndim:]) for v in (ts, t, a, phi)]
     out = np.empty((flat[0].size, bands * bands, channels))
     groups: dict[tuple[int, int, bool], list[int]] = {}
     for i, z in enumerate(flat[0].tolist()):

@@ -19,6 +19,7 @@ shaped ``(..., N * N, C)``, right-handed Z-up frame.
     stratified or Sobol quasi-Monte Carlo sampling.
 -   :func:`rotate_z`, :func:`rotate`, :func:`rotation_z_matrix`: rotation about Z (Habel 2008,
     eq. 4), by any rotation matrix, and the 3x3 matrix of a rotation about +Z.
+-   :func:`gibbs_factors`: the zonal sinc filter of Habel 2008, eq. (5).
 -   :func:`convolve`, :func:`cosine_lobe`, :func:`irradiance`: zonal
     convolution and the clamped-cosine (irradiance) kernel.
 
@@ -52,7 +53,7 @@ from skysh import checks
 __all__ = ["Y00", "K_LINEAR", "K_PRODUCT", "K_ZONAL", "K_SECTORAL", "BASIS_CONSTANTS", "MAX_BANDS",
     "MAX_GAUSS_NODES", "PROJECTION_METHODS", "index", "lm", "band_of_index", "basis", "basis_unchecked",
     "basis_recurrence", "evaluate", "project", "quadrature_rule", "gauss_legendre", "rotate_z", "rotate",
-    "cosine_lobe", "irradiance", "Y_UP_MATRIX", "to_y_up"]
+    "gibbs_factors", "cosine_lobe", "irradiance", "Y_UP_MATRIX", "to_y_up"]
 
 _SQRT_PI: float = math.sqrt(math.pi)
 
@@ -611,6 +612,18 @@ def _cosine_lobe(bands: int) -> NDArray[np.float64]:
                   for l in range(bands)], dtype=np.float64)
     checks.read_only(a)
     return a
+
+
+def gibbs_factors(bands: int) -> NDArray[np.float64]:
+    """
+    Zonal Gibbs filter of Habel eq. (5): sinc(pi l / N) for l = 0 .. N - 1, N = ``bands``.
+
+    Only the zonal (m = 0) coefficients are multiplied by these factors; the
+    factor of l = 0 is 1. Both runtimes fold them in (:class:`skysh.SkySH`,
+    :class:`skysh.hosek_runtime.HosekWilkieSH`).
+    """
+    bands = checks.check_bands(bands)
+    return np.sinc(np.arange(bands) / bands)  # numpy's sinc(x) = sin(pi x) / (pi x)
 
 
 def cosine_lobe(bands: int) -> NDArray[np.float64]:

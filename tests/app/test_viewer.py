@@ -23,7 +23,13 @@ Chromium is installed. What they check:
     page's number formatting equals Python's ``repr``;
 -   the CPU sky and SH basis equal ``skysh.model.preetham.radiance`` and ``skysh.sh.basis.basis``;
     the error numbers equal the same rule evaluated in Python and a dense rule to 1%;
--   screenshots at three settings are saved to ``build/viewer-shots/``.
+-   the Hosek-Wilkie sky (issue 27, item 4): the model switch sets the turbidity slider to each model's
+    domain (a value outside it clamped), shows the albedo and turns the engine presets and the certified
+    table off, each with a note; the read-out's coefficients equal
+    ``SkySH.load(model="hosek-wilkie").coefficients`` to 1e-12 of DC; the true sky's pixels equal
+    ``tone_map(skysh.model.hosek.radiance(...))`` (the Preetham sky and a turned sky must fail), the SH
+    panel's the Python coefficients', the CPU sky the model's and the error numbers the Python rule's;
+-   screenshots at four settings (one of the Hosek-Wilkie sky) are saved to ``build/viewer-shots/``.
 
 Server tests (no browser): loopback only, only the page's files (404 for any other
 path, ``..`` and encoded traversal), a foreign Host header refused, Ctrl-C stops it; and
@@ -49,6 +55,7 @@ import base64
 import concurrent.futures
 import contextlib
 import functools
+import hashlib
 import http.client
 import json
 import math
@@ -73,7 +80,7 @@ from conftest import NO_MATPLOTLIB, load_script
 from skysh import SkySH
 from skysh.app import render, viewer
 from skysh.engines import presets as engines
-from skysh.model import preetham
+from skysh.model import hosek, preetham
 from skysh.sh import basis as sh
 
 shots = load_script(Path(__file__).with_name("viewer_screenshots.py"), "viewer_screenshots")
@@ -129,11 +136,12 @@ quarter of the pixels to draw in software WebGL and to read back; panels of abou
 hold every property checked (each pixel is compared with Python's, the sun is a few pixels wide)."""
 
 DEFAULTS: dict[str, Any] = {
-    "sun-zenith": 30.0, "sun-azimuth": 0.0, "turbidity": 3.0, "bands": 3, "ev": 0.0, "gibbs": True,
-    "dering": False, "irradiance-table": True, "mark-negative": True, "irradiance": False, "engine": "",
+    "model": "preetham", "albedo": 0.0, "sun-zenith": 30.0, "sun-azimuth": 0.0, "turbidity": 3.0, "bands": 3, "ev": 0.0,
+    "gibbs": True, "dering": False, "irradiance-table": True, "mark-negative": True, "irradiance": False, "engine": "",
     "readout-format": "json",
 }
-"""Every control's value at the page's start; each test sets what it needs on top of these."""
+"""Every control's value at the page's start; each test sets what it needs on top of these (the albedo only with
+the Hosek-Wilkie sky, the certified table's box only with the Preetham sky: the others are hidden or disabled)."""
 
 
 # --------------------------------------------------------------------------- #
@@ -214,7 +222,7 @@ def _control(key: str, value: Any) -> list[Any]:
     """[id, kind, value] of one control for SET_CONTROLS, typed as viewer_screenshots.set_controls types it."""
     if isinstance(value, bool):
         return [key, "check", value]
-    if key in ("engine", "readout-format"):
+    if key in shots.SELECTS:
         return [key, "select", value]
     return [key, "fill", str(value)]
 
@@ -239,12 +247,14 @@ class Loaded:
         self.page.on("request", lambda r: self.requests.append(r.url))
         self.page.goto(url, wait_until="commit")
         self.dering_bands: list[int] = []
+        self.hosek_dering_bands: list[int] = []
 
     def wait(self) -> Loaded:
         """Wait for the page's load event, then its first frame (as ``goto`` then viewer_screenshots.READY)."""
         self.page.wait_for_load_state("load", timeout=shots.PAGE_TIMEOUT_MS)
         self.page.wait_for_function(shots.READY, timeout=shots.PAGE_TIMEOUT_MS)
         self.dering_bands = self.page.evaluate("skyshViewer.deringBands")  # fixed when the page starts
+        self.hosek_dering_bands = self.page.evaluate("skyshViewer.hosekDeringBands")
         return self
 
     def set(self, **changes: Any) -> dict[str, Any]:
@@ -253,10 +263,15 @@ class Loaded:
         DEFAULTS, with the page's defaults by intent: no Gibbs filter and deringing (where the
         runtime has it) for an engine or irradiance.
         """
-        values = {**DEFAULTS, **{key.replace("_", "-"): value for key, value in changes.items()}}
-        if values["engine"] or values["irradiance"]:
-            intent = {"gibbs": False, "dering": values["bands"] in self.dering_bands}
-            values = {**values, **intent, **{key.replace("_", "-"): value for key, value in changes.items()}}
+        named = {key.replace("_", "-"): value for key, value in changes.items()}
+        values = {**DEFAULTS, **named}
+        hosek = values["model"] == "hosek-wilkie"
+        for key in ("irradiance-table", "engine") if hosek else ("albedo",):  # disabled or hidden for this model
+            if key not in named:
+                del values[key]
+        if values.get("engine") or values["irradiance"]:
+            intent = {"gibbs": False, "dering": values["bands"] in (self.hosek_dering_bands if hosek else self.dering_bands)}
+            values = {**values, **intent, **named}
         if self.by_hand:
             return shots.set_controls(self.page, values)
         first = [key for key in shots.FIRST if key in values]
@@ -370,6 +385,12 @@ def test_content_security_policy_forbids_the_network(static_dir: Path) -> None:
     directives = dict(part.strip().split(" ", 1) for part in policy.split(";"))
     assert directives["default-src"] == "'none'" and directives["connect-src"] == "'none'"
     assert "'unsafe-inline'" not in policy and "http" not in policy
+    # the two inline module scripts (the Preetham and the Hosek-Wilkie runtime), each allowed by its hash, nothing else
+    index = (static_dir / "index.html").read_text(encoding="utf-8")
+    scripts = re.findall(r'<script type="module">(.*?)</script>', index, flags=re.DOTALL)
+    hashes = {"'sha256-" + base64.b64encode(hashlib.sha256(text.encode()).digest()).decode() + "'" for text in scripts}
+    assert len(scripts) == 2 and set(re.findall(r"'sha256-[^']+'", directives["script-src"])) == hashes
+    assert [text.count("globalThis.skyshViewer.register(") for text in scripts] == [1, 1]
 
 
 # --------------------------------------------------------------------------- #
@@ -631,9 +652,14 @@ def _rule(n_mu: int, n_phi: int) -> tuple[np.ndarray, np.ndarray]:
     return dirs, np.repeat(w * 2.0 * math.pi / n_phi, n_phi)
 
 
-def _errors(state: dict[str, Any], coeffs: np.ndarray, n_mu: int, n_phi: int) -> tuple[float, float]:
+def _preetham_truth(state: dict[str, Any], dirs: np.ndarray) -> np.ndarray:
+    return preetham.radiance(dirs, state["sunZenith"], state["sunAzimuth"], state["turbidity"])
+
+
+def _errors(state: dict[str, Any], coeffs: np.ndarray, n_mu: int, n_phi: int,
+            true_sky: Callable[[dict[str, Any], np.ndarray], np.ndarray] = _preetham_truth) -> tuple[float, float]:
     dirs, w = _rule(n_mu, n_phi)
-    truth = preetham.radiance(dirs, state["sunZenith"], state["sunAzimuth"], state["turbidity"])
+    truth = true_sky(state, dirs)
     norm = np.sum(w[:, None] * truth**2)
     error = np.sum(w[:, None] * (sh.evaluate(coeffs, dirs) - truth) ** 2)
     below = np.sum(w[:, None] * sh.evaluate(coeffs, dirs * [1.0, 1.0, -1.0]) ** 2)
@@ -656,9 +682,174 @@ def test_error_numbers_equal_python(loaded: Loaded, sky: SkySH, setting: dict[st
         assert abs(page - converged) <= RULE_ADEQUACY * converged
 
 
+# --------------------------------------------------------------------------- #
+# The Hosek-Wilkie sky (issue 27, item 4)
+# --------------------------------------------------------------------------- #
+HOSEK_CPU_TOLERANCE: float = 1e-12
+"""The page's CPU Hosek-Wilkie sky (the ES module's radiance) against skysh.model.hosek.radiance, relative to the
+largest value: tests/export/test_export_hosek.py's bound for the same function."""
+
+
+@pytest.fixture(scope="module")
+def hosek_sky() -> Any:
+    return SkySH.load(model="hosek-wilkie")
+
+
+def hosek_coefficients(hosek_sky: Any, state: dict[str, Any], **extra: Any) -> np.ndarray:
+    """The Python runtime's Hosek-Wilkie coefficients for the page's controls."""
+    options = {"bands": state["bands"], "gibbs": state["gibbs"], "dering": state["dering"], "albedo": state["albedo"], **extra}
+    return hosek_sky.coefficients(state["sunZenith"], state["turbidity"], state["sunAzimuth"], **options)
+
+
+def hosek_truth(state: dict[str, Any], dirs: np.ndarray, turn: float = 0.0) -> np.ndarray:
+    return hosek.radiance(dirs, state["sunZenith"], state["sunAzimuth"] + turn, state["turbidity"], state["albedo"])
+
+
+def _shown(page: Any, selector: str) -> bool:
+    return bool(page.evaluate("(s) => document.querySelector(s).checkVisibility()", selector))
+
+
+@pytest.mark.integration
+def test_model_switch_follows_the_models_domain(loaded: Loaded) -> None:
+    """The turbidity slider spans each model's domain, a value outside it clamped on the switch; the albedo shows for
+    Hosek-Wilkie only, the engine preset and the certified table's box are off for it, each with a visible note."""
+    page = loaded.page
+    bounds = "() => [document.getElementById('turbidity').min, document.getElementById('turbidity').max]"
+    state = loaded.set(model="hosek-wilkie", turbidity=8.5, albedo=0.3)
+    assert (state["model"], state["turbidity"], state["albedo"]) == ("hosek-wilkie", 8.5, 0.3)
+    assert page.evaluate(bounds) == ["1", "10"]
+    assert _shown(page, "#albedo") and _shown(page, "#model-note")
+    assert page.locator("#engine").is_disabled() and page.locator("#irradiance-table").is_disabled()
+    for note in ("#engine-note", "#irradiance-table-note"):
+        assert "Preetham only" in page.locator(note).text_content() and _shown(page, note)
+    assert "Hosek-Wilkie sky" in page.locator("[data-panel=latlong-sky] figcaption").text_content()
+    state = page.evaluate(SET_CONTROLS, [[["model", "select", "preetham"]]])  # the model alone: the value carried over
+    assert (state["model"], state["turbidity"]) == ("preetham", 6.0)  # 8.5 clamped into [2.5, 6]
+    assert page.evaluate(bounds) == ["2.5", "6"] and page.locator("#turbidity").input_value() == "6"
+    assert not _shown(page, "#albedo") and not _shown(page, "#model-note") and state["albedo"] == 0.0
+    assert not page.locator("#engine").is_disabled() and page.locator("#engine-note").text_content() == ""
+    assert "Preetham sky" in page.locator("[data-panel=latlong-sky] figcaption").text_content()
+    state = page.evaluate(SET_CONTROLS, [[["model", "select", "hosek-wilkie"]]])
+    assert (state["turbidity"], page.evaluate(bounds)) == (6.0, ["1", "10"])  # inside both domains: kept
+    loaded.set(engine="threejs")  # an engine preset chosen with the Preetham sky...
+    state = page.evaluate(SET_CONTROLS, [[["model", "select", "hosek-wilkie"]]])
+    assert state["engine"] is None and (state["gibbs"], state["dering"]) == (True, False)  # ...goes, with its intent
+
+
+HOSEK_SETTINGS: list[dict[str, Any]] = [
+    {"sun_zenith": 30.0, "sun_azimuth": 40.0, "turbidity": 1.0, "bands": 3},
+    {"sun_zenith": 85.0, "sun_azimuth": -120.0, "turbidity": 9.5, "albedo": 0.6, "bands": 7, "gibbs": False},
+    {"sun_zenith": 0.0, "turbidity": 10.0, "bands": 1, "irradiance": True},
+    {"sun_zenith": 60.0, "sun_azimuth": 135.5, "turbidity": 4.4, "albedo": 1.0, "bands": 5, "irradiance": True},
+    {"sun_zenith": 90.0, "sun_azimuth": 180.0, "turbidity": 2.0, "albedo": 0.25, "bands": 3, "irradiance": True},
+    {"sun_zenith": 70.0, "sun_azimuth": -35.0, "turbidity": 6.5, "albedo": 0.1, "bands": 4, "dering": True},
+]
+"""Hosek-Wilkie settings: both ends of turbidity, albedo and sun zenith, radiance and irradiance (deringing by
+intent), every kind of post step."""
+
+
+@pytest.mark.integration
+def test_hosek_coefficients_shown_equal_the_python_runtime(loaded: Loaded, sky: SkySH, hosek_sky: Any) -> None:
+    for setting in HOSEK_SETTINGS:
+        state = loaded.set(model="hosek-wilkie", **setting)
+        shown = json.loads(loaded.readout())
+        assert (shown["model"], shown["albedo"], shown["bands"]) == ("hosek-wilkie", state["albedo"], setting["bands"])
+        assert "irradiance_table" not in shown and shown["quantity"] == ("irradiance" if state["irradiance"] else "radiance")
+        expected = hosek_coefficients(hosek_sky, state, irradiance=state["irradiance"])
+        coefficients = np.array(shown["coefficients"])
+        assert _dc_error(coefficients, expected) <= DC_TOLERANCE, setting
+        assert _dc_error(np.array(state["coefficients"]).reshape(-1, 3), hosek_coefficients(hosek_sky, state)) <= DC_TOLERANCE
+        # negative controls: another albedo, and the Preetham runtime at the same sun
+        other = hosek_coefficients(hosek_sky, {**state, "albedo": abs(state["albedo"] - 0.1)}, irradiance=state["irradiance"])
+        assert _dc_error(coefficients, other) > 1e3 * DC_TOLERANCE
+        preetham_state = {**state, "turbidity": min(max(state["turbidity"], 2.5), 6.0), "irradianceTable": False}
+        assert _dc_error(coefficients, runtime_coefficients(sky, preetham_state, irradiance=state["irradiance"])) > 0.01
+
+
+@pytest.mark.integration
+@pytest.mark.parametrize("setting", [
+    {"sun_zenith": 30.0, "sun_azimuth": 40.0, "turbidity": 3.0},
+    {"sun_zenith": 88.0, "sun_azimuth": -120.0, "turbidity": 8.0, "albedo": 0.5, "ev": 1.5},
+    {"sun_zenith": 60.0, "sun_azimuth": 100.0, "turbidity": 1.0, "albedo": 1.0},
+])
+def test_hosek_true_sky_pixels_equal_python(loaded: Loaded, setting: dict[str, Any]) -> None:
+    """The shader's Hosek-Wilkie sky against tone_map(skysh.model.hosek.radiance): PIXEL_TOLERANCE as for the Preetham
+    sky (float32 in the shader, double in Python); the Preetham sky and a turned sky, drawn the same, must fail."""
+    state = loaded.set(model="hosek-wilkie", **setting)
+    pixels = loaded.panel("latlong-sky").astype(int)
+    dirs = latlong_dirs(pixels.shape[1], pixels.shape[0])
+    assert np.abs(pixels - render.tone_map(hosek_truth(state, dirs), state["exposure"])).max() <= PIXEL_TOLERANCE
+    assert np.all(pixels[dirs[..., 2] < 0.0] == 0)  # zero below the horizon
+    turned = render.tone_map(hosek_truth(state, dirs, turn=0.5), state["exposure"])  # 0.2: a clear sky's glow moves 3 levels
+    assert np.abs(pixels - turned).max() > PIXEL_TOLERANCE  # negative control: the sun elsewhere
+    other = preetham.radiance(dirs, state["sunZenith"], state["sunAzimuth"], min(max(state["turbidity"], 2.5), 6.0))
+    assert np.abs(pixels - render.tone_map(other, state["exposure"])).max() > 10 * PIXEL_TOLERANCE  # the other model
+
+
+@pytest.mark.integration
+def test_hosek_sh_pixels_equal_python(loaded: Loaded, hosek_sky: Any) -> None:
+    state = loaded.set(model="hosek-wilkie", mark_negative=False, bands=7, gibbs=False, sun_zenith=75.0,
+                       sun_azimuth=100.0, turbidity=5.0, albedo=0.4)
+    pixels = loaded.panel("latlong-sh").astype(int)
+    dirs = latlong_dirs(pixels.shape[1], pixels.shape[0])
+    coeffs = hosek_coefficients(hosek_sky, state)
+    assert np.abs(pixels - render.tone_map(sh.evaluate(coeffs, dirs), state["exposure"])).max() <= PIXEL_TOLERANCE
+    turned = sh.rotate_z(coeffs, 0.2)
+    assert np.abs(pixels - render.tone_map(sh.evaluate(turned, dirs), state["exposure"])).max() > PIXEL_TOLERANCE
+
+
+@pytest.mark.integration
+def test_hosek_sky_is_blue_at_midday_and_glows_near_a_low_sun(loaded: Loaded) -> None:
+    loaded.set(model="hosek-wilkie", sun_zenith=20.0, turbidity=3.0)
+    pixels = loaded.panel("latlong-sky")
+    upper = pixels[: pixels.shape[0] // 2].reshape(-1, 3).astype(float).mean(axis=0)
+    assert upper[2] > upper[0] and upper[2] >= upper[1], upper
+    loaded.set(model="hosek-wilkie", sun_zenith=88.0, sun_azimuth=0.0, turbidity=3.0)
+    pixels = loaded.panel("latlong-sky").astype(float)
+    height, width = pixels.shape[:2]
+    band = pixels[int(height * 80 / 180) : height // 2]  # from 10 degrees above the horizon to it
+    near, far = band[:, int(width * 160 / 360) : int(width * 200 / 360)], band[:, : int(width * 20 / 360)]
+    near_mean = near.reshape(-1, 3).mean(axis=0)
+    assert near_mean[0] > near_mean[2], near_mean  # warm near the setting sun
+    # the horizon glows towards the sun (measured 1.28 times the opposite azimuth's levels, which tone mapping compresses)
+    assert near.sum(axis=-1).mean() > 1.15 * far.sum(axis=-1).mean()
+    row, col = _brightest(pixels)
+    assert abs(col - width / 2) <= SUN_COLUMN_FRACTION * width and abs(row - 88.0 / 180.0 * height) <= SUN_ROW_FRACTION * height
+
+
+@pytest.mark.integration
+def test_hosek_cpu_sky_equals_python(loaded: Loaded) -> None:
+    rng = np.random.default_rng(5)
+    dirs = rng.standard_normal((300, 3))
+    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    for ts, t, phi, albedo in ((0.0, 1.0, 0.0, 0.0), (0.7, 3.3, 2.0, 0.5), (math.pi / 2, 10.0, -1.0, 1.0)):
+        args = [ts, t, phi, dirs.ravel().tolist(), "hosek-wilkie", albedo]
+        page = np.array(loaded.page.evaluate("(a) => skyshViewer.trueRadiance(...a)", args)).reshape(-1, 3)
+        truth = hosek.radiance(dirs, ts, phi, t, albedo)
+        assert np.max(np.abs(page - truth)) <= HOSEK_CPU_TOLERANCE * np.max(np.abs(truth))
+
+
+@pytest.mark.integration
+@pytest.mark.parametrize("setting", [
+    {"sun_zenith": 30.0, "bands": 3, "albedo": 0.2},
+    {"sun_zenith": 86.0, "sun_azimuth": 77.0, "turbidity": 9.0, "bands": 7, "gibbs": False},
+])
+def test_hosek_error_numbers_equal_python(loaded: Loaded, hosek_sky: Any, setting: dict[str, Any]) -> None:
+    state = loaded.set(model="hosek-wilkie", **setting)
+    coeffs = hosek_coefficients(hosek_sky, state)
+    same = _errors(state, coeffs, viewer.ERROR_RULE_MU, viewer.ERROR_RULE_PHI, hosek_truth)
+    dense = _errors(state, coeffs, 4 * viewer.ERROR_RULE_MU, 4 * viewer.ERROR_RULE_PHI, hosek_truth)
+    for page, python, converged in zip((state["error"], state["ringing"]), same, dense, strict=True):
+        assert abs(page - python) <= RULE_TOLERANCE * python
+        assert abs(page - converged) <= RULE_ADEQUACY * converged
+    preetham_rule = _errors({**state, "turbidity": min(state["turbidity"], 6.0)}, coeffs, viewer.ERROR_RULE_MU,
+                            viewer.ERROR_RULE_PHI)
+    assert abs(state["error"] - preetham_rule[0]) > 0.01 * preetham_rule[0]  # negative control: the Preetham truth
+
+
 @pytest.mark.integration
 @pytest.mark.slow  # pictures for people (build/viewer-shots/); that every panel is drawn is test_every_panel_is_drawn
-def test_screenshots_at_three_settings(browser: Any, static_dir: Path) -> None:
+def test_screenshots_at_each_setting(browser: Any, static_dir: Path) -> None:
     startup = shots.save_screenshots(browser, (static_dir / "index.html").as_uri(), shots.DEFAULT_OUT)
     assert set(startup) == set(shots.SETTINGS)
     for name in shots.SETTINGS:

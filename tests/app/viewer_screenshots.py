@@ -1,6 +1,6 @@
 """
-Screenshots of the viewer page at three settings, in headless Chromium
-======================================================================
+Screenshots of the viewer page at four settings, in headless Chromium
+=====================================================================
 
     python tests/app/viewer_screenshots.py [OUT_DIR]      (default build/viewer-shots/)
 
@@ -54,9 +54,12 @@ SETTINGS: dict[str, dict[str, Any]] = {
     "sunset": {"sun-zenith": 88.0, "sun-azimuth": -120.0, "turbidity": 2.5, "bands": 7, "gibbs": False},
     "hazy-engine": {"sun-zenith": 60.0, "sun-azimuth": 135.0, "turbidity": 6.0, "bands": 3, "ev": 1.0,
                     "engine": "threejs", "readout-format": "snippet"},
+    "hosek-low-sun": {"model": "hosek-wilkie", "sun-zenith": 84.0, "sun-azimuth": -60.0, "turbidity": 4.0,
+                      "albedo": 0.3, "bands": 5},
 }
-"""Three settings (control id -> value) that show the page's range: a clear midday sky, a sunset
-with 7 bands and no Gibbs filter (ringing below the horizon), a hazy sky with an engine snippet."""
+"""Four settings (control id -> value) that show the page's range: a clear midday sky, a sunset
+with 7 bands and no Gibbs filter (ringing below the horizon), a hazy sky with an engine snippet,
+and the Hosek-Wilkie sky with a low sun over a ground of albedo 0.3."""
 
 
 def find_chromium() -> str | None:
@@ -82,8 +85,12 @@ def open_page(browser: Any, url: str) -> Any:
     return page
 
 
-FIRST: tuple[str, ...] = ("engine", "irradiance", "bands")
-"""Controls set before the others: they change the defaults (the intent) or what the others allow."""
+FIRST: tuple[str, ...] = ("model", "engine", "irradiance", "bands")
+"""Controls set before the others: they change the defaults (the intent) or what the others allow (the model: the
+turbidity's range, the albedo, the engine presets)."""
+
+SELECTS: tuple[str, ...] = ("model", "engine", "readout-format")
+"""The page's select controls (set by option value); the other non-checkbox controls are range inputs."""
 
 
 def _current(page: Any, ids: list[str]) -> dict[str, Any]:
@@ -106,7 +113,7 @@ def set_controls(page: Any, values: dict[str, Any]) -> dict[str, Any]:
             if isinstance(value, bool):
                 if value != current[key]:
                     control.set_checked(value)
-            elif key in ("engine", "readout-format"):
+            elif key in SELECTS:
                 if value != current[key]:
                     control.select_option(value)
             elif float(value) != float(current[key]):

@@ -42,7 +42,7 @@ from skysh import SkySH
 from skysh.app import viewer
 from skysh.export import dering as export_dering
 from skysh.export import template
-from skysh.export.js import DECLARATIONS_TEMPLATE, MODULE_TEMPLATE, module_source
+from skysh.export.js import DECLARATIONS_TEMPLATE, DERING_TEMPLATE, MODULE_TEMPLATE, module_source
 from skysh.export.tables import engine_plan, export_tables
 from skysh.model import preetham
 from skysh.post import dering
@@ -114,7 +114,8 @@ def data() -> dict[str, Any]:
 def small_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A folder with the template filled with the fixture (small.mjs), its declarations (small.d.mts) and the runner."""
     folder = tmp_path_factory.mktemp("js_template")
-    (folder / "small.mjs").write_text(template.fill(MODULE_TEMPLATE, **WORDS, DATA=FIXTURE.read_text(encoding="utf-8")))
+    (folder / "small.mjs").write_text(template.fill(MODULE_TEMPLATE, **WORDS, DATA=FIXTURE.read_text(encoding="utf-8"),
+                                                     DERING=template.text(DERING_TEMPLATE)))
     (folder / "small.d.mts").write_text(template.fill(DECLARATIONS_TEMPLATE, **DECLARATION_WORDS))
     (folder / "runner.mjs").write_text(RUNNER)
     return folder
@@ -263,7 +264,8 @@ class TestFixture:
         assert block["steps"] == shmin.NEWTON_STEPS and block["subnormal"] == dering.SUBNORMAL_EXPONENT
 
     def test_holes_are_the_ones_filled(self) -> None:
-        assert template.holes(MODULE_TEMPLATE) == set(WORDS) | {"DATA"}
+        assert template.holes(MODULE_TEMPLATE) == set(WORDS) | {"DATA", "DERING"}
+        assert not template.holes(DERING_TEMPLATE)  # fixed code, embedded whole
         assert template.holes(DECLARATIONS_TEMPLATE) == set(DECLARATION_WORDS)
         assert max(len(template.holes(MODULE_TEMPLATE)), len(template.holes(DECLARATIONS_TEMPLATE))) <= template.MAX_HOLES
 
@@ -284,7 +286,8 @@ class TestFixture:
         assert plans[3]["index"] == [q for p in range(plan.offset.size) for q, _ in plan.terms(p)]
         assert plans[3]["factor"] == [v for p in range(plan.offset.size) for _, v in plan.terms(p)]
         assert plans[3]["offset"] == plan.offset.tolist() and plans[3]["band"] == plan.band_factor.tolist()
-        assert source.endswith(template.text(MODULE_TEMPLATE).split("{{DATA}}")[1])  # the code: the template's text
+        code = template.text(MODULE_TEMPLATE).split("{{DATA}}")[1].replace("{{DERING}}", template.text(DERING_TEMPLATE))
+        assert source.endswith(code)  # the code: the template's text, its deringing file embedded whole
 
     def test_the_certificate_numbers_are_python_s(self, sky: SkySH) -> None:
         """At 7 bands the module's certificate constants are Python's (skysh.sh.minimum, skysh.post.dering), passed, not

@@ -42,6 +42,7 @@ from report import (
     s10_pictures,
     s11_irradiance_table,
     s12_scene_irradiance,
+    s13_hosek,
 )
 from report.common import Context, Section, markdown_table, sig
 from report.plans import FULL, QUICK
@@ -53,7 +54,7 @@ from skysh.table import irradiance_fit
 SECTIONS: dict[int, ModuleType] = {
     m.NUMBER: m
     for m in (s01_projection, s02_fit, s03_speed, s04_gibbs, s05_dering, s06_quantization, s07_irradiance,
-              s08_stability, s09_scene, s10_pictures, s11_irradiance_table, s12_scene_irradiance)
+              s08_stability, s09_scene, s10_pictures, s11_irradiance_table, s12_scene_irradiance, s13_hosek)
 }
 """Report sections in order; each computes its data, then renders it."""
 

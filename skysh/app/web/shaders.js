@@ -1,6 +1,7 @@
 // skysh viewer: the WebGL2 shaders, as strings. One full-viewport triangle per panel and one
 // program per view. The SH basis is written out from the page's configuration (skysh.sh.basis's
-// recurrence constants); the true sky takes skysh.model.preetham's tables as uniforms (through sky.js).
+// recurrence constants); the true sky takes skysh.model.preetham's tables as uniforms (through sky.js), or the
+// Hosek-Wilkie parameters of its ES module's configuration() per frame, with skysh.model.hosek's horizon offset inlined.
 "use strict";
 
 (function () {
@@ -86,6 +87,8 @@ uniform vec3 u_sun;         // unit vector towards the sun, Z up
 uniform float u_perez[15];  // Perez A..E of x, y and Y at the turbidity
 uniform vec3 u_scale;       // zenith value / F(zenith) of x, y and Y
 uniform mat3 u_xyz_to_rgb;
+uniform bool u_hosek;       // the Hosek-Wilkie sky instead of the Preetham sky
+uniform vec3 u_hw[10];      // its parameters A, B, C, D, E, F, G, H, I (eq. 9), then L_M x efficacy (cd/m^2), per channel
 uniform float u_exposure;
 uniform bool u_mark_negative;
 uniform vec3 u_camera;
@@ -98,8 +101,24 @@ float perezF(int q, float ct, float gamma, float cg) {
   return (1.0 + u_perez[k] * horizon) * (1.0 + u_perez[k + 2] * exp(u_perez[k + 3] * gamma) + u_perez[k + 4] * cg * cg);
 }
 
-// The Preetham sky in linear RGB, cd/m^2; zero below the horizon.
+const float HW_HORIZON_OFFSET = ${floats([config.hosekHorizonOffset])}; // skysh.model.hosek.HORIZON_OFFSET
+
+// The Hosek-Wilkie sky (2012, eq. 9) in linear sRGB, cd/m^2, as skysh.model.hosek.radiance; zero below the horizon.
+vec3 hosekSky(vec3 d) {
+  if (d.z < 0.0) return vec3(0.0);
+  float gamma = atan(length(cross(d, u_sun)), dot(d, u_sun));
+  float cg = cos(gamma);
+  vec3 H = u_hw[7];
+  vec3 den = 1.0 + H * (H - 2.0 * cg);
+  vec3 chi = (1.0 + cg * cg) / (den * sqrt(den));
+  vec3 f = (1.0 + u_hw[0] * exp(u_hw[1] / (d.z + HW_HORIZON_OFFSET)))
+    * (u_hw[2] + u_hw[3] * exp(u_hw[4] * gamma) + u_hw[5] * cg * cg + u_hw[6] * chi + u_hw[8] * sqrt(d.z));
+  return f * u_hw[9];
+}
+
+// The true sky in linear RGB, cd/m^2 (the Preetham sky unless u_hosek); zero below the horizon.
 vec3 trueSky(vec3 d) {
+  if (u_hosek) return hosekSky(d);
   if (d.z < 0.0) return vec3(0.0);
   float gamma = atan(length(cross(d, u_sun)), dot(d, u_sun));
   float cg = cos(gamma);

@@ -1,5 +1,5 @@
 // skysh viewer: the CPU side of the page, in double precision, no DOM (it also runs under node).
-// The true Preetham sky (1999, appendix), the real SH basis (skysh.sh.basis's recurrence), the error
+// The true Preetham sky (1999, appendix) and the Hosek-Wilkie sky (2012, eq. 9: its ES module's radiance), the real SH basis (skysh.sh.basis's recurrence), the error
 // numbers, the number formats of the engine snippets and the read-out text. Every constant comes from the page's
 // configuration, which skysh.app.viewer generates from skysh.model.preetham, skysh.sh.basis and skysh.engines.presets;
 // the zenith luminance is the page's JavaScript runtime's own (skysh.export.js's module: the formula written once).
@@ -35,9 +35,10 @@
 
   /**
    * The sky's CPU side for config (skysh.app.viewer.page_config) and runtime, the page's JavaScript runtime (the
-   * module of skysh.export.js), whose zenithLuminance(ts, t) (cd/m^2, unchecked) the true sky takes.
+   * module of skysh.export.js), whose zenithLuminance(ts, t) (cd/m^2, unchecked) the true sky takes; hosek (optional),
+   * the Hosek-Wilkie ES module (skysh.export.hosek), whose configuration() and radiance() the Hosek-Wilkie sky takes.
    */
-  function create(config, runtime) {
+  function create(config, runtime, hosek = null) {
     const zenithLuminance = runtime.zenithLuminance;
     if (typeof zenithLuminance !== "function") {
       throw new TypeError("SkyshSky.create needs the runtime's zenithLuminance(sunZenith, turbidity) (skysh.app.viewer hands it over)");
@@ -47,22 +48,36 @@
     const maxBands = config.maxBands;
     const lobe = config.lobe;
 
-    /** Everything the sky needs per (sun zenith, turbidity, azimuth): the shader's uniforms too. */
-    function skyState(ts, t, phi) {
+    /**
+     * Everything the sky needs per (sun zenith, turbidity, azimuth): the shader's uniforms too. model "hosek-wilkie":
+     * the Hosek-Wilkie sky at the grey ground albedo, its parameters (hosek: A..I, LM, efficacy, each [r, g, b]) from
+     * the module's configuration(); else the Preetham sky.
+     */
+    function skyState(ts, t, phi, model = "preetham", albedo = 0.0) {
       phi %= TWO_PI;
       const st = Math.sin(ts);
       const sun = [st * Math.cos(phi), st * Math.sin(phi), Math.cos(ts)];
+      if (model === "hosek-wilkie") {
+        return { model, sunZenith: ts, turbidity: t, sunAzimuth: phi, albedo, sun, hosek: hosek.configuration(ts, t, albedo) };
+      }
       const zenith = [chromaticity(config.zenithX, ts, t), chromaticity(config.zenithY, ts, t), zenithLuminance(ts, t)];
       const perezXyY = [perezAt(config.perez.x, t), perezAt(config.perez.y, t), perezAt(config.perez.Y, t)];
       const gammaZ = angle(0.0, 0.0, 1.0, sun); // the zenith on the path of every view, as skysh.model.preetham.xyY
       const cosGammaZ = Math.cos(gammaZ);
       const fz = perezXyY.map((p) => perez(p, 1.0, gammaZ, cosGammaZ));
       const scale = zenith.map((z, q) => z / fz[q]); // the shader's value = scale F
-      return { sunZenith: ts, turbidity: t, sunAzimuth: phi, sun, zenith, perez: perezXyY, fz, scale };
+      return { model, sunZenith: ts, turbidity: t, sunAzimuth: phi, sun, zenith, perez: perezXyY, fz, scale };
     }
 
     /** Linear RGB radiance (cd/m^2) of the true sky towards unit (dx, dy, dz) into out[k..k+2]; 0 below the horizon. */
     function radiance(state, dx, dy, dz, out, k) {
+      if (state.model === "hosek-wilkie") { // the module's own radiance (0 below the horizon)
+        const v = hosek.radiance([dx, dy, dz], state.sunZenith, state.turbidity, state.sunAzimuth, state.albedo);
+        out[k] = v[0];
+        out[k + 1] = v[1];
+        out[k + 2] = v[2];
+        return;
+      }
       if (dz < 0.0) {
         out[k] = out[k + 1] = out[k + 2] = 0.0;
         return;
@@ -228,14 +243,33 @@
     return rows;
   }
 
-  /** The runtime's options of the controls s (unticked table: the old pipeline, as irradiance_table=False). */
+  /**
+   * The runtime's options of the controls s (unticked table: the old pipeline, as irradiance_table=False); for the
+   * Hosek-Wilkie sky (s.model) the albedo instead: it has no table.
+   */
   function runtimeOptions(s, extra) {
+    if (s.model === "hosek-wilkie") return { bands: s.bands, gibbs: s.gibbs, dering: s.dering, albedo: s.albedo, ...extra };
     return { bands: s.bands, gibbs: s.gibbs, dering: s.dering, ...(s.irradianceTable ? {} : { irradianceTable: false }), ...extra };
   }
 
   /** Whether the runtime takes the certified irradiance table for these controls (its rule, by intent). */
   function usesTable(s, diffuse) {
-    return s.irradianceTable && diffuse && s.bands === 3 && !s.gibbs && s.dering;
+    return s.model !== "hosek-wilkie" && s.irradianceTable && diffuse && s.bands === 3 && !s.gibbs && s.dering;
+  }
+
+  /**
+   * The Hosek-Wilkie ES module (skysh.export.hosek) behind the Preetham runtime's call coefficients(sunZenith,
+   * turbidity, sunAzimuth, {bands, ...options}): one createSky(bands) per band count, built on first use. No engine
+   * map (the module has none: ENGINES is empty).
+   */
+  function hosekRuntime(module) {
+    const skies = new Map();
+    function coefficients(ts, t, phi, options = {}) {
+      const { bands = module.MAX_BANDS, ...rest } = options;
+      if (!skies.has(bands)) skies.set(bands, module.createSky(bands));
+      return skies.get(bands).coefficients(ts, t, phi, rest);
+    }
+    return { ...module, coefficients, ENGINES: Object.freeze([]) };
   }
 
   /** The numbers of the read-out and their DC term: of the coefficients, or of the radiance an engine converts. */
@@ -267,8 +301,11 @@
       if (s.engine === null) return "// Choose an engine preset for a paste-ready snippet (the JSON holds skysh's own coefficients).";
       return fillSnippet(config.snippets[s.engine][String(s.bands)], values);
     }
+    const hosek = s.model === "hosek-wilkie";
     const info = {
       skysh_version: runtime.SKYSH_VERSION,
+      model: hosek ? "hosek-wilkie" : "preetham",
+      ...(hosek ? { albedo: s.albedo } : {}),
       quantity: s.irradiance ? "irradiance" : "radiance",
       bands: s.bands,
       sun_zenith_deg: s.sunZenith / DEG,
@@ -278,7 +315,7 @@
       turbidity: s.turbidity,
       gibbs: s.gibbs,
       dering: s.dering,
-      irradiance_table: usesTable(s, s.irradiance || s.engine !== null),
+      ...(hosek ? {} : { irradiance_table: usesTable(s, s.irradiance || s.engine !== null) }),
       colourspace: config.colourspace,
     };
     let payload;
@@ -298,6 +335,7 @@
   }
 
   globalThis.SkyshSky = {
-    create, pyRepr, fillSnippet, NUMBER_FORMATS, NOISE_FLOOR, dcTerm, printable, runtimeOptions, usesTable, readout,
+    create, pyRepr, fillSnippet, NUMBER_FORMATS, NOISE_FLOOR, dcTerm, printable, runtimeOptions, usesTable, hosekRuntime,
+    readout,
   };
 })();

@@ -1,5 +1,5 @@
-// skysh viewer: the page. Controls -> coefficients (skysh's JavaScript runtime, inlined in
-// index.html) -> one WebGL2 canvas drawn panel by panel, the error numbers and the read-out.
+// skysh viewer: the page. Controls -> coefficients (skysh's JavaScript runtimes of the Preetham and the
+// Hosek-Wilkie sky, both inlined in index.html) -> one WebGL2 canvas drawn panel by panel, the error numbers and the read-out.
 // A control change schedules one animation frame that does all of it (nothing is deferred).
 // globalThis.skyshViewer also serves the browser tests (state, nextFrame, readPanel, ...).
 "use strict";
@@ -13,21 +13,27 @@
 
   const $ = (id) => document.getElementById(id);
   let config, sky, runtime, gl, programs, canvas, panels;
+  const runtimes = {}; // model -> its runtime (the Hosek-Wilkie module behind SkyshSky.hosekRuntime); runtime: the Preetham one
+  const hosekModel = () => $("model").value === "hosek-wilkie";
+  const runtimeFor = (model) => runtimes[model];
   let current = null; // everything the last frame computed
   let pending = false;
   const frameWaiters = [];
 
   // ------------------------------------------------------------------ controls
-  const RANGES = ["sun-zenith", "sun-azimuth", "turbidity", "bands", "ev"];
+  const RANGES = ["sun-zenith", "sun-azimuth", "turbidity", "albedo", "bands", "ev"];
   const CHECKS = ["gibbs", "dering", "irradiance-table", "mark-negative", "irradiance"];
-  const SELECTS = ["engine", "readout-format"];
+  const SELECTS = ["model", "engine", "readout-format"];
 
   function controls() {
     const value = (id) => Number($(id).value);
-    const [zmin, zmax] = runtime.SUN_ZENITH_DOMAIN, [tmin, tmax] = runtime.TURBIDITY_DOMAIN;
+    const model = $("model").value, rt = runtimeFor(model);
+    const [zmin, zmax] = rt.SUN_ZENITH_DOMAIN, [tmin, tmax] = rt.TURBIDITY_DOMAIN;
     const bands = Math.round(value("bands"));
     const engine = $("engine").value || null;
     return {
+      model,
+      albedo: model === "hosek-wilkie" ? value("albedo") : 0.0,
       sunZenithDeg: value("sun-zenith"),
       sunAzimuthDeg: value("sun-azimuth"),
       // degrees -> radians, kept inside the runtime's domain (90 deg may round a hair above pi/2)
@@ -53,19 +59,46 @@
     $("dering").checked = diffuse;
   }
 
-  /** Controls that depend on others (deringing needs a runtime that has it), and the values shown. */
+  /**
+   * The model's ranges: the turbidity slider spans its runtime's domain (the value clamped into it), the bands its
+   * runtime's; the Hosek-Wilkie sky has no engine map, so the engine preset goes back to none (and its intent).
+   */
+  function applyModel() {
+    const rt = runtimeFor($("model").value);
+    const [tmin, tmax] = rt.TURBIDITY_DOMAIN, t = Number($("turbidity").value);
+    $("turbidity").min = String(tmin);
+    $("turbidity").max = String(tmax);
+    $("turbidity").value = String(Math.min(Math.max(t, tmin), tmax));
+    $("bands").max = String(rt.MAX_BANDS);
+    if (hosekModel() && $("engine").value !== "") {
+      $("engine").value = "";
+      applyIntent();
+    }
+  }
+
+  /** Controls that depend on others (deringing needs a runtime that has it; the model), and the values shown. */
   function syncControls() {
     const bands = Math.round(Number($("bands").value));
-    const available = viewer.deringBands.includes(bands);
+    const hosek = hosekModel();
+    const available = (hosek ? viewer.hosekDeringBands : viewer.deringBands).includes(bands);
     $("dering").disabled = !available;
     if (!available) $("dering").checked = false; // what is shown is what is applied
     $("dering-note").textContent = available ? "" : `(not in this runtime for ${bands} bands)`;
     $("irradiance").disabled = $("engine").value !== "";
     if ($("irradiance").disabled) $("irradiance").checked = false;
-    $("irradiance-table").disabled = !viewer.hasIrradianceTable;
+    $("irradiance-table").disabled = hosek || !viewer.hasIrradianceTable;
     if (!viewer.hasIrradianceTable) $("irradiance-table").checked = false;
-    $("irradiance-table-note").textContent = viewer.hasIrradianceTable ? "" : "(not in this runtime)";
+    $("irradiance-table-note").textContent = hosek ? "(Preetham only: the Hosek-Wilkie runtime has none)"
+      : viewer.hasIrradianceTable ? "" : "(not in this runtime)";
+    $("engine").disabled = hosek;
+    $("engine-note").textContent = hosek ? "(Preetham only: the Hosek-Wilkie runtime has no engine map)" : "";
+    $("albedo-row").hidden = !hosek;
+    $("model-note").hidden = !hosek;
+    const [tmin, tmax] = runtimeFor($("model").value).TURBIDITY_DOMAIN;
+    $("turbidity-domain").textContent = `[${tmin}, ${tmax}]`;
+    for (const el of document.querySelectorAll(".model-name")) el.textContent = hosek ? "Hosek-Wilkie" : "Preetham";
     const number = (id) => Number($(id).value);
+    $("albedo-out").value = number("albedo").toFixed(2);
     $("sun-zenith-out").value = number("sun-zenith").toFixed(1);
     $("sun-azimuth-out").value = number("sun-azimuth").toFixed(1);
     $("turbidity-out").value = number("turbidity").toFixed(2);
@@ -75,6 +108,7 @@
 
   function onInput(event) {
     if (event.target.id === "engine" || event.target.id === "irradiance") applyIntent();
+    if (event.target.id === "model") applyModel();
     syncControls();
     schedule();
   }
@@ -113,8 +147,10 @@
     return shader;
   }
 
-  const UNIFORMS = ["rect", "sh", "irr", "ground", "sun", "perez", "scale", "xyz_to_rgb", "exposure", "mark_negative", "camera", "target"];
-  const ARRAYS = ["sh", "irr", "perez"];
+  const UNIFORMS = ["rect", "sh", "irr", "ground", "sun", "perez", "scale", "xyz_to_rgb", "hosek", "hw", "exposure",
+    "mark_negative", "camera", "target"];
+  const ARRAYS = ["sh", "irr", "perez", "hw"];
+  const HW_ORDER = ["A", "B", "C", "D", "E", "F", "G", "H", "I"]; // u_hw's order (shaders.js), then L_M x efficacy
 
   function link(view) {
     const program = gl.createProgram();
@@ -162,14 +198,25 @@
     }
     const m = config.xyzToRgb;
     const xyzToRgb = [m[0][0], m[1][0], m[2][0], m[0][1], m[1][1], m[2][1], m[0][2], m[1][2], m[2][2]];
+    const hosek = state.sky.model === "hosek-wilkie";
+    const hw = new Float32Array(30);
+    if (hosek) {
+      const p = state.sky.hosek;
+      HW_ORDER.forEach((name, q) => hw.set(p[name], 3 * q));
+      hw.set(p.LM.map((v) => v * p.efficacy), 27); // in double, then rounded to float once
+    }
     for (const { program, uniforms } of Object.values(programs)) { // uniforms are per program
       gl.useProgram(program);
       gl.uniform3fv(uniforms.sh, radiance);
       gl.uniform3fv(uniforms.irr, irradiance);
       gl.uniform3fv(uniforms.ground, ground);
       gl.uniform3fv(uniforms.sun, state.sky.sun);
-      gl.uniform1fv(uniforms.perez, state.sky.perez.flat());
-      gl.uniform3fv(uniforms.scale, state.sky.scale);
+      gl.uniform1i(uniforms.hosek, hosek ? 1 : 0);
+      gl.uniform3fv(uniforms.hw, hw);
+      if (!hosek) {
+        gl.uniform1fv(uniforms.perez, state.sky.perez.flat());
+        gl.uniform3fv(uniforms.scale, state.sky.scale);
+      }
       gl.uniformMatrix3fv(uniforms.xyz_to_rgb, false, xyzToRgb);
       gl.uniform1f(uniforms.exposure, exposure);
       gl.uniform1i(uniforms.mark_negative, state.markNegative ? 1 : 0);
@@ -254,10 +301,11 @@
   function render(only = null) {
     const start = performance.now();
     const s = controls();
-    s.sky = sky.skyState(s.sunZenith, s.turbidity, s.sunAzimuth);
-    const coeffs = runtime.coefficients(s.sunZenith, s.turbidity, s.sunAzimuth, optionsOf(s, {}));
+    s.sky = sky.skyState(s.sunZenith, s.turbidity, s.sunAzimuth, s.model, s.albedo);
+    const rt = runtimeFor(s.model);
+    const coeffs = rt.coefficients(s.sunZenith, s.turbidity, s.sunAzimuth, optionsOf(s, {}));
     // the scene's irradiance as the runtime gives it (the certified table by intent), not A_l times the radiance
-    const irr = runtime.coefficients(s.sunZenith, s.turbidity, s.sunAzimuth, optionsOf(s, { irradiance: true }));
+    const irr = rt.coefficients(s.sunZenith, s.turbidity, s.sunAzimuth, optionsOf(s, { irradiance: true }));
     const numbers = sky.metrics(s.sky, coeffs, s.bands);
     const exposure = (config.keyValue / numbers.logAverage) * 2 ** s.ev;
     const rects = gl ? draw(s, coeffs, irr, exposure, only) : {};
@@ -265,7 +313,7 @@
     $("error-value").textContent = percent(numbers.error);
     $("ringing-value").textContent = percent(numbers.ringing);
     $("exposure-value").textContent = `${exposure.toPrecision(4)} per cd/m\u00b2`;
-    const text = SkyshSky.readout(runtime, config, s);
+    const text = SkyshSky.readout(rt, config, s);
     if ($("readout").value !== text) $("readout").value = text;
     current = { ...s, coefficients: Array.from(coeffs), irradianceCoefficients: Array.from(irr), exposure, ...numbers, rects };
     viewer.frame += 1;
@@ -299,20 +347,34 @@
   }
 
   // ------------------------------------------------------------------ start and test hooks
-  viewer.start = function start(rt) {
-    runtime = rt;
-    config = JSON.parse($("skysh-config").textContent);
-    sky = SkyshSky.create(config, runtime);
-    UP = new Float64Array(config.maxBands * config.maxBands);
-    viewer.deringBands = [];
-    for (let n = 1; n <= runtime.MAX_BANDS; n++) {
+  /** The band counts whose deringing rt has. */
+  function deringBands(rt) {
+    const bands = [];
+    for (let n = 1; n <= rt.MAX_BANDS; n++) {
       try {
-        runtime.coefficients(0.5, 3.0, 0.0, { bands: n, dering: true });
-        viewer.deringBands.push(n);
+        rt.coefficients(0.5, 3.0, 0.0, { bands: n, dering: true });
+        bands.push(n);
       } catch (error) {
         if (!(error instanceof RangeError)) throw error; // this runtime has no deringing for n bands
       }
     }
+    return bands;
+  }
+
+  /** Each inlined module script hands its runtime over (model: "preetham" or "hosek-wilkie"); the page starts with both. */
+  viewer.register = function register(model, rt) {
+    runtimes[model] = model === "hosek-wilkie" ? SkyshSky.hosekRuntime(rt) : rt;
+    if (model === "hosek-wilkie") viewer.hosekModule = rt;
+    if (runtimes.preetham && runtimes["hosek-wilkie"]) start();
+  };
+
+  function start() {
+    runtime = runtimes.preetham;
+    config = JSON.parse($("skysh-config").textContent);
+    sky = SkyshSky.create(config, runtime, viewer.hosekModule);
+    UP = new Float64Array(config.maxBands * config.maxBands);
+    viewer.deringBands = deringBands(runtime);
+    viewer.hosekDeringBands = deringBands(runtimes["hosek-wilkie"]);
     try { // the certified irradiance table: a 3-band runtime of a format-4 file
       runtime.coefficients(0.5, 3.0, 0.0, { bands: 3, irradiance: true, irradianceTable: true });
       viewer.hasIrradianceTable = true;
@@ -331,7 +393,7 @@
       console.error(error);
     }
     schedule();
-  };
+  }
 
   /** What the last frame computed (controls, coefficients, error numbers, exposure, panel rectangles). */
   viewer.state = () => (current === null ? null : JSON.parse(JSON.stringify(current)));
@@ -355,8 +417,8 @@
   };
 
   /** The CPU sky and basis at flat unit vectors [x0, y0, z0, x1, ...] (for the tests). */
-  viewer.trueRadiance = (sunZenith, turbidity, sunAzimuth, dirs) => {
-    const state = sky.skyState(sunZenith, turbidity, sunAzimuth);
+  viewer.trueRadiance = (sunZenith, turbidity, sunAzimuth, dirs, model = "preetham", albedo = 0.0) => {
+    const state = sky.skyState(sunZenith, turbidity, sunAzimuth, model, albedo);
     const out = new Float64Array(dirs.length);
     for (let k = 0; k < dirs.length; k += 3) sky.radiance(state, dirs[k], dirs[k + 1], dirs[k + 2], out, k);
     return Array.from(out);
