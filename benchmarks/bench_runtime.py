@@ -25,8 +25,9 @@ in one run, so the ratios do not depend on the machine's speed:
     the batch of case 2 (not the target's measure).
 
 5.  ``curve``: the per-frame cost of one batched call of 1, 10, ..., 10^5 frames (10^6 with
-    ``--million``) at 3 and 7 bands, radiance, irradiance and lit (sun and ground), each against its
-    best per-frame cost at 10^3..10^4 frames (the ratio). Target (issue 26): ratio <= 1.5 from 10
+    ``--million``) at 3 and 7 bands, radiance, irradiance and lit (sun and ground), written into a
+    preallocated result (``out=``, a frame loop's use), each against its best per-frame cost at
+    10^3..10^4 frames (the ratio); ``new_us`` / ``new_ratio``: the same calls each returning a new array. Target (issue 26): ratio <= 1.5 from 10
     frames up; below a few hundred frames the floor is numpy's cost per call, printed beside it for
     radiance (:func:`numpy_floor`, and ``fixed_us``: the cost of one frame in a batch).
 6.  ``bands``: one scalar call at 1..7 bands (radiance), against the 7-band call: the scalar path is
@@ -51,8 +52,9 @@ The curve is timed in the process's CPU time (:func:`time.process_time`, every t
 BLAS threads included, whose spin-waits a thread clock or wall time on an idle core would hide), the frames of a
 size evaluated in turn with the other sizes' (interleaved rounds, the median kept); for radiance up to
 :data:`FLOOR_UP_TO` frames beside :func:`numpy_floor`, the least numpy such a batch can be (``floor_us``,
-``floor_ratio``: the floor's per-frame cost over the best, ``over_floor``: the runtime's over the floor's), and for
-every size ``fresh_us``: per frame, allocating and writing once an array of the result's size (the system's price for
+``floor_ratio``: the floor's per-frame cost over the best, ``over_floor``: the runtime's over the floor's), for
+every size ``new_sys_us``: the kernel's CPU time per frame of the calls without ``out`` (:func:`resource.getrusage`), and
+``fresh_us``: per frame, allocating and writing once an array of the result's size (the system's price for
 fresh memory, which beyond tens of MB each call pays anew).
 """
 
@@ -61,6 +63,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import resource
 import statistics
 import time
 import timeit
@@ -121,7 +124,10 @@ CURVE_BEST: tuple[int, int] = (1000, 10_000)
 """The sizes whose per-frame cost is each case's best (the issue's reference)."""
 
 CURVE_FRAMES: float = 2e5
-"""Frames evaluated per timed round of a size (at least one call)."""
+"""Frames evaluated per timed round of a size (at least one call, at most :data:`CURVE_CALLS`)."""
+
+CURVE_CALLS: int = 4000
+"""Calls per timed round of a size at most (about 0.3 s at one frame a call)."""
 
 
 FLOOR_UP_TO: int = 100
@@ -146,9 +152,20 @@ def numpy_floor(plan: object, ts: np.ndarray, t: np.ndarray, phi: np.ndarray) ->
     return out
 
 
+def cpu_times() -> tuple[float, float]:
+    """(user, system) CPU seconds of the process, every thread."""
+    t = resource.getrusage(resource.RUSAGE_SELF)
+    return t.ru_utime, t.ru_stime
+
+
 def curve(sky: SkySH, bands: int, case: str, sizes: list[int], repeats: int, rng: np.random.Generator) -> None:
     """Emit the per-frame cost of each batch size (median over interleaved rounds) against the best, and for
-    radiance the numpy floor's (:func:`numpy_floor`) beside it."""
+    radiance the numpy floor's (:func:`numpy_floor`) beside it.
+
+    The curve is the frame loop of a real-time user: each size's calls write into one preallocated result
+    (``out=``). The same calls without it (``new_us``, ``new_ratio``; ``new_sys_us``: the kernel's share) pay fresh
+    memory for every result; in a VM that returns freed memory to its host (Firecracker's free page reporting)
+    that price varies from call to call and beyond 10^5 frames can exceed the arithmetic."""
     options = dict(CURVE_CASES[case])
     if case == "irradiance" and bands > 3:  # deringing each 7-band function (~0.6 ms) is bench_dering.py's
         options["dering"] = False
@@ -156,10 +173,12 @@ def curve(sky: SkySH, bands: int, case: str, sizes: list[int], repeats: int, rng
     plan = sky.plan(bands)
     for n in sizes:
         ts, tu, phi = rng.uniform(0.0, math.pi / 2.0, n), rng.uniform(2.5, 6.0, n), rng.uniform(-math.pi, math.pi, n)
-        calls[n] = (max(1, int(CURVE_FRAMES // n)), ts, tu, phi)
+        calls[n] = (max(1, min(CURVE_CALLS, int(CURVE_FRAMES // n))), ts, tu, phi)
         np.testing.assert_allclose(numpy_floor(plan, ts, tu, phi).reshape(n, -1, 3),  # the floor computes the same
                                    sky.coefficients(ts, tu, phi, bands=bands), rtol=1e-9, atol=1e-9)
     rounds: dict[int, list[float]] = {n: [] for n in sizes}
+    new_rounds: dict[int, list[tuple[float, float]]] = {n: [] for n in sizes}  # (user + system, system) per frame
+    buffers = {n: sky.coefficients(ts, tu, phi, bands=bands, **options) for n, (_, ts, tu, phi) in calls.items()}
     fresh_rounds: dict[int, list[float]] = {n: [] for n in sizes}  # a fresh result's size, allocated and written once
     rows = bands * bands + (1 if case == "lit" else 0)
     floor_rounds: dict[int, list[float]] = {n: [] for n in sizes if case == "radiance" and n <= FLOOR_UP_TO}
@@ -167,10 +186,16 @@ def curve(sky: SkySH, bands: int, case: str, sizes: list[int], repeats: int, rng
         sky.coefficients(ts, tu, phi, bands=bands, **options)  # warm-up: plans, first touch
     for _ in range(repeats):
         for n, (number, ts, tu, phi) in calls.items():
+            out = buffers[n]
             start = time.process_time()
             for _ in range(number):
-                sky.coefficients(ts, tu, phi, bands=bands, **options)
+                sky.coefficients(ts, tu, phi, bands=bands, out=out, **options)
             rounds[n].append((time.process_time() - start) / (number * n))
+            user, system = cpu_times()
+            for _ in range(number):
+                sky.coefficients(ts, tu, phi, bands=bands, **options)
+            user, system = (a - b for a, b in zip(cpu_times(), (user, system)))
+            new_rounds[n].append(((user + system) / (number * n), system / (number * n)))
             start = time.process_time()
             np.empty((n, rows, 3)).fill(0.0)
             fresh_rounds[n].append((time.process_time() - start) / n)
@@ -183,7 +208,10 @@ def curve(sky: SkySH, bands: int, case: str, sizes: list[int], repeats: int, rng
     floor = {n: statistics.median(r) for n, r in floor_rounds.items()}
     best = min(per_frame[n] for n in CURVE_BEST if n in per_frame)
     for n in sizes:
-        extra: dict[str, object] = {"fresh_us": statistics.median(fresh_rounds[n]) * 1e6}
+        new = statistics.median(r[0] for r in new_rounds[n])
+        extra: dict[str, object] = {"new_us": new * 1e6, "new_ratio": new / best,
+                                    "new_sys_us": statistics.median(r[1] for r in new_rounds[n]) * 1e6,
+                                    "fresh_us": statistics.median(fresh_rounds[n]) * 1e6}
         if n in floor:
             extra.update(floor_us=floor[n] * 1e6, floor_ratio=floor[n] / best, over_floor=per_frame[n] / floor[n])
         emit("curve", bands, per_frame[n], f"best per frame at {CURVE_BEST[0]}..{CURVE_BEST[1]}", best, case=case,

@@ -15,6 +15,8 @@ Input checks shared by every public function of skysh
 -   :func:`check_size`: refuse work whose arrays would exceed :data:`MAX_ARRAY_ELEMENTS`.
 -   :func:`check_choice`: refuse a name that is not one of the valid ones, listing them.
 -   :func:`check_flag`: refuse anything but ``bool`` / ``numpy.bool_`` (a TypeError).
+-   :func:`check_out`: refuse an output buffer that is not a writeable, C-contiguous float64 array of the result's
+    shape, or that shares memory with an input.
 -   :func:`number_text`: a float as text that reads back exactly (for messages).
 -   :func:`integer_text`: an integer beyond float64 by its size (for messages).
 -   :func:`interval_text`: a closed interval as the documentation writes it ("[2.5, 6]", "[0, pi/2]").
@@ -41,7 +43,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = ["MAX_ARRAY_ELEMENTS", "as_float_array", "check_range", "check_scalar", "check_cutoff", "check_dirs",
-    "check_bands", "check_coeffs", "check_count", "check_seed", "check_size", "check_flag", "check_choice",
+    "check_bands", "check_coeffs", "check_count", "check_seed", "check_size", "check_flag", "check_choice", "check_out",
     "number_text", "interval_text", "short_repr", "read_only"]
 
 MAX_ARRAY_ELEMENTS: int = 1 << 28
@@ -244,6 +246,21 @@ def check_flag(value: object, name: str) -> bool:
     if type(value) is bool or type(value) is np.bool_:
         return bool(value)
     raise TypeError(f"{name} must be a bool (True or False), got {short_repr(value)} of type {type(value).__name__}")
+
+
+def check_out(out: Any, shape: tuple[int, ...], inputs: tuple[Any, ...] = (), name: str = "out") -> NDArray[np.float64]:
+    """Return ``out``, an output buffer a function writes its result into: a numpy array of float64, C-contiguous,
+    writeable, of exactly ``shape``, sharing no memory with any array of ``inputs`` (the result would overwrite
+    what is still to be read). Anything else is refused with a ValueError naming ``name`` and the buffer expected."""
+    want = f"{name} must be a writeable, C-contiguous numpy array of float64 and shape {shape}, got"
+    if not isinstance(out, np.ndarray):
+        raise ValueError(f"{want} {short_repr(out)} of type {type(out).__name__}")
+    flags = [f for f, ok in (("not C-contiguous", out.flags.c_contiguous), ("read-only", out.flags.writeable)) if not ok]
+    if out.dtype != np.float64 or out.shape != shape or flags:
+        raise ValueError(f"{want} dtype {out.dtype} and shape {out.shape}" + (f" ({', '.join(flags)})" if flags else ""))
+    if any(isinstance(a, np.ndarray) and np.may_share_memory(out, a) for a in inputs):
+        raise ValueError(f"{name} shares memory with an input: the result would overwrite parameters it still reads")
+    return out
 
 
 def read_only(*arrays: NDArray) -> None:

@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from skysh.checks import check_range, short_repr
+from skysh.checks import check_out, check_range, short_repr
 from skysh.model import hosek, hosek_frame
 from skysh.options import Options
 from skysh.post import dering as post_dering
@@ -87,6 +87,7 @@ class HosekWilkieSH:
         self, sun_zenith: ArrayLike, turbidity: ArrayLike, sun_azimuth: ArrayLike = 0.0, bands: int = 3,
         gibbs: bool | None = None, dering: bool | None = None, irradiance: bool = False,
         colourspace: str | None = None, albedo: ArrayLike = 0.0, accuracy: str = "default",
+        out: NDArray[np.float64] | None = None,
     ) -> NDArray[np.float64]:
         """
         SH coefficients of the Hosek-Wilkie sky for one frame (or a batch).
@@ -115,6 +116,10 @@ class HosekWilkieSH:
             The rule, a key of :data:`skysh.model.hosek_frame.ACCURACIES`: "fast", "default"
             (meets worst E_mean 3e-5 at 3 bands and 1e-4 at 7 with a margin of 2x or more) or
             "fine" (:mod:`skysh.model.hosek_frame`'s table).
+        out
+            Optional buffer for the result, as :meth:`skysh.SkySH.coefficients`' (a writeable,
+            C-contiguous float64 array of the result's shape, sharing no memory with the
+            parameters): the result is copied into it and it is returned.
 
         Returns
         -------
@@ -128,7 +133,7 @@ class HosekWilkieSH:
         ValueError
             A parameter outside its range, NaN or inf (naming it and the range); arrays that do
             not broadcast; ``bands`` outside [1, 7]; an RGB albedo with another colourspace; an
-            unknown colourspace or accuracy.
+            unknown colourspace or accuracy; an ``out`` that is not such a buffer (checked before any work).
         TypeError
             ``gibbs``, ``dering`` or ``irradiance`` not a bool.
         """
@@ -136,17 +141,28 @@ class HosekWilkieSH:
                             max_bands=BANDS)
         space = RGB_DATASET if o.colourspace is None else o.colourspace
         grey, rgb = _albedo(albedo, space)
+        params = (sun_zenith, turbidity, sun_azimuth)
+        if out is not None:  # before any work, when the parameters broadcast (else hosek_frame names them)
+            try:
+                shape = np.broadcast_shapes(*(np.shape(p) for p in params))
+            except ValueError:
+                shape = None
+            if shape is not None:
+                check_out(out, shape + (o.bands * o.bands, 3), params)
         if rgb is None:
-            out = hosek_frame.coefficients(sun_zenith, turbidity, grey, sun_azimuth, o.bands, space, accuracy)
+            sky = hosek_frame.coefficients(sun_zenith, turbidity, grey, sun_azimuth, o.bands, space, accuracy)
         else:
-            out = hosek_frame.coefficients(sun_zenith, turbidity, rgb, sun_azimuth, o.bands, space, accuracy,
+            sky = hosek_frame.coefficients(sun_zenith, turbidity, rgb, sun_azimuth, o.bands, space, accuracy,
                                            per_channel=True)
         if o.gibbs:  # Habel eq. (5): zonal rows only
-            out[..., self._zonal[o.bands], :] *= self._gibbs[o.bands]
+            sky[..., self._zonal[o.bands], :] *= self._gibbs[o.bands]
         if o.dering:
-            out = post_dering.dering(out, "irradiance")[0]
+            sky = post_dering.dering(sky, "irradiance")[0]
         if o.irradiance:
-            out *= self._lobe[o.bands]
+            sky *= self._lobe[o.bands]
+        if out is None:
+            return sky
+        check_out(out, sky.shape, params)[...] = sky
         return out
 
 

@@ -27,7 +27,11 @@ the m >= 0 table (in x, then in turbidity), one gather and one multiplication
 that rotate (eq. 4) and fill the m < 0 coefficients, and the luminance scale
 (one tan, two exp). A batch is one design matrix, one matrix product over the
 full table and one multiplication by the rotation factors (built by angle
-addition). ``python benchmarks/bench_runtime.py`` prints what each costs
+addition), evaluated in chunks into the result: a new array, or the caller's
+buffer (``out=``; a frame loop reusing one pays no fresh memory per call). The
+composed paths (sun and ground, deringing, a colourspace conversion) run a
+large batch as calls on chunks of frames into the result, their temporaries
+bounded. ``python benchmarks/bench_runtime.py`` prints what each costs
 against a bare numpy product; ``python benchmarks/bench_lights.py`` what the
 sun and the ground add.
 
@@ -58,6 +62,7 @@ from skysh.checks import (
     check_choice,
     check_dirs,
     check_flag,
+    check_out,
     check_range,
     check_scalar,
     check_size,
@@ -85,6 +90,12 @@ _TWO_PI: float = 2.0 * math.pi
 BATCH_CHUNK: int = 1 << 16
 """Output values a batch evaluates at a time (512 KiB of float64, its design matrix about as large at 7 bands):
 per item, 10^6 frames cost what 10^3 do (``python benchmarks/bench_runtime.py --curve-only``)."""
+
+COMPOSED_CHUNK: int = 1 << 19
+"""Output values a batch through the composed paths (the sun and the ground, deringing, a colourspace conversion)
+evaluates at a time, each chunk a call of its own written into the result: their temporaries (several arrays of
+the chunk's size, 4 MiB each) stay bounded whatever the batch's size, and a chunk's fixed cost (about 0.3 ms at
+7 bands lit) is under 2% of its arithmetic (``python benchmarks/bench_runtime.py --curve-only --million``)."""
 
 FEW_FRAMES: int = 32
 """Frames up to which a batch's chunk takes its Chebyshev terms and rotation factors from one ``cos`` (as the
@@ -276,6 +287,7 @@ class SkySH:
         self, sun_zenith: ArrayLike, turbidity: ArrayLike, sun_azimuth: ArrayLike = 0.0, bands: int = 3,
         gibbs: bool | None = None, dering: bool | None = None, irradiance: bool = False, colourspace: str | None = None,
         sun: bool = False, ground_albedo: ArrayLike = 0.0, irradiance_table: bool | None = None,
+        out: NDArray[np.float64] | None = None,
     ) -> NDArray[np.float64]:
         """
         SH coefficients of the sky (and its sun and ground) for one frame (or a batch).
@@ -311,13 +323,21 @@ class SkySH:
             old pipeline. True: the table (with ``irradiance=False``, its radiance-equivalent
             E_lm / A_l, for engines). With it ``dering`` acts only after a conversion to a
             ``colourspace`` whose matrix has a negative entry (a no-op where non-negative).
+        out
+            Optional buffer for the result: a writeable, C-contiguous float64 array of the result's
+            shape, sharing no memory with the parameters; the result is written into it and it is
+            returned. A frame loop that reuses one buffer pays no fresh memory per call (for
+            10^5 frames or more the system's price for it can exceed the arithmetic:
+            ``python benchmarks/bench_runtime.py --curve-only``). The sky is evaluated straight into
+            it for radiance and irradiance without deringing or a colourspace conversion; the
+            other paths compute the result, then copy it in. Same values as without it, bit for bit.
 
         Returns (N * N, 3), or (..., N * N, 3) for array parameters (broadcast; empty: (0, N * N, 3);
         at most ``skysh.checks.MAX_ARRAY_ELEMENTS`` values in its largest array); radiance in
         cd/m^2 (R = G = B = Y for the colourspace's white), linear RGB.
 
         Raises ValueError for a parameter outside its range (named, with the range), not finite, not
-        broadcasting, too large, or an unknown colourspace; ``sun=True`` without the file's sun table;
+        broadcasting, too large, or an unknown colourspace; an ``out`` that is not such a buffer; ``sun=True`` without the file's sun table;
         ``irradiance_table=True`` without the table, with ``bands`` other than 3 or ``gibbs=True``.
         TypeError for ``gibbs``, ``dering``, ``irradiance``, ``sun`` or ``irradiance_table`` not a bool.
         The options are checked and resolved by :meth:`skysh.options.Options.resolve` (its docstring: the rules).
@@ -327,23 +347,60 @@ class SkySH:
             o.bands, o.gibbs, o.dering, o.irradiance, o.irradiance_table, o.sun, o.ground_albedo)
         ts, t, phi = real_scalar(sun_zenith), real_scalar(turbidity), real_scalar(sun_azimuth)
         scalar = ts is not None and t is not None and phi is not None
+        frame = (ts, t, phi) if scalar else self._frames(sun_zenith, turbidity, sun_azimuth)
+        out, into, chunked = self._route(out, frame, scalar, o, colourspace, (sun_zenith, turbidity, sun_azimuth))
+        if chunked:
+            return self._composed_chunks(frame, out, o, colourspace, ground_albedo)
         if sun or albedo is not None:
-            frame = (ts, t, phi) if scalar else (sun_zenith, turbidity, sun_azimuth)
-            return self._lit(frame, scalar, bands, gibbs, dering, colourspace, sun, albedo, table, irradiance)
+            lit = self._lit(frame, scalar, bands, gibbs, dering, colourspace, sun, albedo, table, irradiance)
+            return _into(out, lit)
         plan = self._table_plans[irradiance] if table else self._plans[(bands, gibbs)]  # type: ignore[index]
         if scalar:
-            out = self._one(ts, t, phi, plan)  # type: ignore[arg-type]
+            sky = self._one(ts, t, phi, plan)  # type: ignore[arg-type]
         else:  # the array path: one design matrix, one matrix product, vectorised rotation
-            out = self._batch_sky(*self._frames(sun_zenith, turbidity, sun_azimuth), plan)
-        if table:  # never negative (the certificate); a conversion mixing signs is deringed after it
-            return self._table_colour(out, colourspace, dering, irradiance)
-        if dering:
-            out = _dering(out)
-        if irradiance:
-            out = out * self._plans[(bands, True)].lobe
+            sky = self._batch_sky(*frame, plan, into=out if into else None)
+        return _into(out, self._finish(sky, o, colourspace))
+
+    def _finish(self, sky: NDArray, o: Options, colourspace: str | None) -> NDArray:
+        """The sky's steps after the evaluation (``sky``: this call's own array, or ``out``): the table's conversion,
+        or deringing, the lobe (in place) and the conversion."""
+        if o.irradiance_table:  # never negative (the certificate); a conversion mixing signs is deringed after it
+            return self._table_colour(sky, colourspace, o.dering, o.irradiance)
+        if o.dering:
+            sky = _dering(sky)
+        if o.irradiance:
+            sky *= self._plans[(o.bands, True)].lobe
         if colourspace is not None and colourspace != self.colourspace:
-            out = out @ self._colour_matrix(colourspace).T
-        return out
+            sky = sky @ self._colour_matrix(colourspace).T
+        return sky
+
+    def _route(self, out: Any, frame: tuple, scalar: bool, o: Options, colourspace: str | None,
+               params: tuple) -> tuple[NDArray | None, bool, bool]:
+        """(``out`` checked against the result's shape, or None; whether the sky may be evaluated straight into it: no
+        deringing or conversion after it but the table's; whether a batch runs as :meth:`_composed_chunks`: a step
+        after the sky that makes new arrays, and more frames than a chunk)."""
+        if out is not None:
+            out = check_out(out, (() if scalar else frame[3]) + (o.bands * o.bands, 3), () if scalar else params)
+        plain = not o.dering and (colourspace is None or colourspace == self.colourspace)
+        composed = not plain or o.sun or o.ground_albedo is not None
+        chunked = composed and not scalar and math.prod(frame[3]) > _composed_step(o.bands)
+        return out, plain or o.irradiance_table, chunked
+
+    def _composed_chunks(self, frame: tuple, out: NDArray | None, o: Options, colourspace: str | None,
+                         ground_albedo: ArrayLike) -> NDArray:
+        """A composed batch (checked ``frame`` of :meth:`_frames`) as calls of :func:`_composed_step` frames each into the result
+        (``out`` or a new array), with the resolved options ``o`` (:meth:`skysh.options.Options.resolve` takes its
+        own result back unchanged)."""
+        shape, k = frame[3], o.bands * o.bands
+        result = np.empty(shape + (k, 3)) if out is None else out
+        flat = result.reshape(-1, k, 3)
+        ts, t, phi = _flat_frames(*frame)
+        step = _composed_step(o.bands)
+        for start in range(0, flat.shape[0], step):
+            part = slice(start, start + step)
+            self.coefficients(ts[part], t[part], phi[part], o.bands, o.gibbs, o.dering, o.irradiance, colourspace,
+                              o.sun, ground_albedo, o.irradiance_table, out=flat[part])
+        return result
 
     def _options(
         self, bands: int = 3, gibbs: bool | None = None, dering: bool | None = None, irradiance: bool = False,
@@ -405,18 +462,23 @@ class SkySH:
                              f"{t.shape} and {phi.shape}") from None
         return ts, t, phi, shape
 
-    def _batch_sky(self, ts: NDArray, t: NDArray, phi: NDArray, shape: tuple[int, ...], plan: _Plan) -> NDArray:
+    def _batch_sky(self, ts: NDArray, t: NDArray, phi: NDArray, shape: tuple[int, ...], plan: _Plan,
+                   into: NDArray | None = None) -> NDArray:
         """(shape..., rows, 3) of checked arrays: rows N * N, plus the unfiltered c_10 for a ``c10`` plan.
 
-        Evaluated in chunks of at most :data:`BATCH_CHUNK` output values into the preallocated result, so
-        the temporaries (the design matrix, the rotation factors) stay in cache whatever the batch's size."""
+        Evaluated in chunks of at most :data:`BATCH_CHUNK` output values into the preallocated result (``into``, a
+        buffer checked by :func:`skysh.checks.check_out`, or a new array), so the temporaries (the design matrix,
+        the rotation factors) stay in cache whatever the batch's size."""
         rows = plan.batch_rot_index.shape[0]
         size = math.prod(shape)
         largest = max((ts.size, "sun_zenith"), (t.size, "turbidity"), (phi.size, "sun_azimuth"))[1]
         check_size(size * max(len(plan.table_flat), rows * 3), largest, f"{size:,} frames")
-        out = np.zeros(shape + (rows, 3)) if 0 in shape else np.empty(shape + (rows, 3))
+        if into is not None:
+            out = into
+        else:
+            out = np.zeros(shape + (rows, 3)) if 0 in shape else np.empty(shape + (rows, 3))
         flat = out.reshape(size, rows * 3)
-        ts, t, phi = (a.reshape(-1) if a.shape == shape else np.broadcast_to(a, shape).ravel() for a in (ts, t, phi))
+        ts, t, phi = _flat_frames(ts, t, phi, shape)
         step = max(1, BATCH_CHUNK // (rows * 3))
         for start in range(0, size, step):
             part = slice(start, start + step)
@@ -456,7 +518,8 @@ class SkySH:
         """SH of sky + sun + ground, in the output colourspace (the order of :mod:`skysh.lighting.lights`); radiance,
         or irradiance (the clamped-cosine convolution last) when ``irradiance``.
 
-        ``frame``: (sun_zenith, turbidity, sun_azimuth), Python floats when ``scalar``. ``table``: the sky
+        ``frame``: (sun_zenith, turbidity, sun_azimuth), Python floats when ``scalar``, else checked by
+        :meth:`_frames` (with the broadcast shape). ``table``: the sky
         from the irradiance table (radiance-equivalent, never deringed), the sum deringed only after a
         conversion whose matrix mixes signs.
         """
@@ -477,9 +540,8 @@ class SkySH:
             plan = self._lit_plan(bands, gibbs, table)
             sky, sun_sh, e_h = plan.parts(ts, t, phi, x, y, sun)
         else:
-            frames = self._frames(*frame)
             plan = self._lit_plan(bands, gibbs, table)
-            sky, sun_sh, e_h = self._lit_batch(*frames, plan, sun)
+            sky, sun_sh, e_h = self._lit_batch(*frame, plan, sun)
         return self._lit_finish(plan, sky, sun_sh, e_h, dering_sky, colourspace if convert else None, albedo,
                                 table and dering, irradiance)
 
@@ -509,7 +571,7 @@ class SkySH:
         sky, e_h = extended[..., :k, :], ground.HORIZONTAL_FACTOR * extended[..., k, :]
         if not sun:
             return sky, None, e_h
-        ts, t, phi = (np.broadcast_to(a, shape).ravel() for a in (ts, t, phi))
+        ts, t, phi = _flat_frames(ts, t, phi, shape)
         phi = np.fmod(phi, _TWO_PI)  # the sky's rotation reduces so (_rotation_factors): the sun sits where the sky turns
         rgb = self._sun.rgb(ts, t)  # type: ignore[union-attr]
         e_h = e_h + (np.cos(ts)[:, None] * rgb).reshape(shape + (3,))
@@ -617,6 +679,24 @@ def _sky_into(ts: NDArray, t: NDArray, phi: NDArray, plan: _Plan, out: NDArray) 
     design = (tx[:, None, :] * ty[None, :, :]).reshape(-1, n)  # (T, n): term-major, rows contiguous
     np.matmul(design.T, plan.table_flat, out=out)
     out.reshape(n, -1, 3)[...] *= np.take(rot, plan.batch_rot_index, axis=1)[:, :, None]
+
+
+def _composed_step(bands: int) -> int:
+    """Frames per chunk of a composed batch: :data:`COMPOSED_CHUNK` output values."""
+    return max(1, COMPOSED_CHUNK // (3 * bands * bands))
+
+
+def _flat_frames(ts: NDArray, t: NDArray, phi: NDArray, shape: tuple[int, ...]) -> tuple[NDArray, NDArray, NDArray]:
+    """Checked parameter arrays broadcast to ``shape`` and flattened (views where they already have it)."""
+    return tuple(a.reshape(-1) if a.shape == shape else np.broadcast_to(a, shape).ravel() for a in (ts, t, phi))
+
+
+def _into(out: NDArray | None, result: NDArray) -> NDArray:
+    """``result``, or ``out`` (a checked buffer of its shape) holding it."""
+    if out is None or result is out:
+        return result
+    out[...] = result
+    return out
 
 
 def _plain_key(bands: Any, gibbs: Any, dering: Any, irradiance: Any, irradiance_table: Any, sun: Any, ground_albedo: Any,

@@ -65,10 +65,10 @@ EXPORT_PACKAGE: str = f"{PACKAGE}.export"
 """The export package: issue 24's second group (its template files are not Python and are counted apart)."""
 
 PACKAGE_BUDGETS: dict[str, int] = {
-    "skysh": 15, "skysh.__main__": 5, "skysh._version": 1, "skysh.checks": 155, "skysh.domain": 110,
+    "skysh": 15, "skysh.__main__": 5, "skysh._version": 1, "skysh.checks": 162, "skysh.domain": 110,
     "skysh.options": 90, "skysh.files": 65, "skysh.literals": 30,
     "skysh.sh": 440, "skysh.post": 660, "skysh.model": 995, "skysh.table": 1225, "skysh.lighting": 440,
-    "skysh.runtime": 375, "skysh.hosek_runtime": 70, "skysh.engines": 395, "skysh.export": 700, "skysh.app": 1450,
+    "skysh.runtime": 415, "skysh.hosek_runtime": 70, "skysh.engines": 395, "skysh.export": 700, "skysh.app": 1450,
 }
 """Code lines each package (a sub-package, or a module of the package's root) may hold (issue 24, item 5):
 a ceiling a change must argue with, counted in code lines so that prose is never squeezed to pay for code.
@@ -79,7 +79,10 @@ doubling), ``skysh.checks`` (145 to 155: range checks in two reductions) and ``s
 a chunk of functions at a time); issue 27 ``skysh.model`` (900 to 980: the Hosek-Wilkie per-frame rule, 175 lines,
 with the dataset's reader shrunk by 90; to 995: an albedo per RGB channel), ``skysh.hosek_runtime`` (new, 70: the
 Hosek-Wilkie runtime object), ``skysh.runtime`` (to 375: ``SkySH.load(model=)``) and ``skysh.app`` (1360 to 1450:
-``--model`` and ``--albedo`` on three commands, the Hosek-Wilkie render panel and the viewer's model switch, 84 lines)."""
+``--model`` and ``--albedo`` on three commands, the Hosek-Wilkie render panel and the viewer's model switch, 84 lines).
+Issue 26 (item 3) raised ``skysh.runtime`` (375 to 415: ``out=``, the composed paths in chunks into the result, the
+coefficients call split into its route and its finish to stay within the complexity limit) and ``skysh.checks``
+(155 to 162: ``check_out``)."""
 
 BUDGETS: dict[str, int] = {"skysh code lines": 7100, "export code lines": 700, "skysh __all__ names": 260,
                            "import cycles": 0}
