@@ -27,9 +27,10 @@ in one run, so the ratios do not depend on the machine's speed:
 5.  ``curve``: the per-frame cost of one batched call of 1, 10, ..., 10^5 frames (10^6 with
     ``--million``) at 3 and 7 bands, radiance, irradiance and lit (sun and ground), written into a
     preallocated result (``out=``, a frame loop's use), each against its best per-frame cost at
-    10^3..10^4 frames (the ratio); ``new_us`` / ``new_ratio``: the same calls each returning a new array. Target (issue 26): ratio <= 1.5 from 10
-    frames up; below a few hundred frames the floor is numpy's cost per call, printed beside it for
-    radiance (:func:`numpy_floor`, and ``fixed_us``: the cost of one frame in a batch).
+    10^3..10^4 frames (the ratio); ``new_us`` / ``new_ratio``: the same calls each returning a new
+    array. Target (issue 26): ratio <= 1.5 from 10 frames up; below a few hundred frames the floor
+    is numpy's cost per call, printed beside it for radiance (:func:`numpy_floor`, and ``fixed_us``:
+    the cost of one frame in a batch).
 6.  ``bands``: one scalar call at 1..7 bands (radiance), against the 7-band call: the scalar path is
     bound by numpy's per-call cost, so it is nearly flat in the bands.
 

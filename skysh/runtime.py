@@ -337,8 +337,8 @@ class SkySH:
         cd/m^2 (R = G = B = Y for the colourspace's white), linear RGB.
 
         Raises ValueError for a parameter outside its range (named, with the range), not finite, not
-        broadcasting, too large, or an unknown colourspace; an ``out`` that is not such a buffer; ``sun=True`` without the file's sun table;
-        ``irradiance_table=True`` without the table, with ``bands`` other than 3 or ``gibbs=True``.
+        broadcasting, too large, or an unknown colourspace; an ``out`` that is not such a buffer; ``sun=True``
+        without the file's sun table; ``irradiance_table=True`` without the table, with ``bands`` other than 3 or ``gibbs=True``.
         TypeError for ``gibbs``, ``dering``, ``irradiance``, ``sun`` or ``irradiance_table`` not a bool.
         The options are checked and resolved by :meth:`skysh.options.Options.resolve` (its docstring: the rules).
         """
@@ -347,7 +347,7 @@ class SkySH:
             o.bands, o.gibbs, o.dering, o.irradiance, o.irradiance_table, o.sun, o.ground_albedo)
         ts, t, phi = real_scalar(sun_zenith), real_scalar(turbidity), real_scalar(sun_azimuth)
         scalar = ts is not None and t is not None and phi is not None
-        frame = (ts, t, phi) if scalar else self._frames(sun_zenith, turbidity, sun_azimuth)
+        frame: tuple = (ts, t, phi) if scalar else self._frames(sun_zenith, turbidity, sun_azimuth)
         out, into, chunked = self._route(out, frame, scalar, o, colourspace, (sun_zenith, turbidity, sun_azimuth))
         if chunked:
             return self._composed_chunks(frame, out, o, colourspace, ground_albedo)
@@ -358,7 +358,7 @@ class SkySH:
         if scalar:
             sky = self._one(ts, t, phi, plan)  # type: ignore[arg-type]
         else:  # the array path: one design matrix, one matrix product, vectorised rotation
-            sky = self._batch_sky(*frame, plan, into=out if into else None)
+            sky = self._batch_sky(frame[0], frame[1], frame[2], frame[3], plan, into=out if into else None)
         return _into(out, self._finish(sky, o, colourspace))
 
     def _finish(self, sky: NDArray, o: Options, colourspace: str | None) -> NDArray:
@@ -541,7 +541,7 @@ class SkySH:
             sky, sun_sh, e_h = plan.parts(ts, t, phi, x, y, sun)
         else:
             plan = self._lit_plan(bands, gibbs, table)
-            sky, sun_sh, e_h = self._lit_batch(*frame, plan, sun)
+            sky, sun_sh, e_h = self._lit_batch(frame[0], frame[1], frame[2], frame[3], plan, sun)
         return self._lit_finish(plan, sky, sun_sh, e_h, dering_sky, colourspace if convert else None, albedo,
                                 table and dering, irradiance)
 
@@ -688,7 +688,8 @@ def _composed_step(bands: int) -> int:
 
 def _flat_frames(ts: NDArray, t: NDArray, phi: NDArray, shape: tuple[int, ...]) -> tuple[NDArray, NDArray, NDArray]:
     """Checked parameter arrays broadcast to ``shape`` and flattened (views where they already have it)."""
-    return tuple(a.reshape(-1) if a.shape == shape else np.broadcast_to(a, shape).ravel() for a in (ts, t, phi))
+    flat = [a.reshape(-1) if a.shape == shape else np.broadcast_to(a, shape).ravel() for a in (ts, t, phi)]
+    return flat[0], flat[1], flat[2]
 
 
 def _into(out: NDArray | None, result: NDArray) -> NDArray:

@@ -65,7 +65,7 @@ def test_out_holds_the_same_values_bit_for_bit(sky: SkySH, options: dict, monkey
 @given(rows=st.integers(0, 5), columns=st.integers(1, 4), bands=st.integers(1, 7), irradiance=st.booleans(),
        seed=st.integers(0, 2**16))
 def test_out_with_broadcast_parameters(rows: int, columns: int, bands: int, irradiance: bool, seed: int) -> None:
-    sky = _SKY()
+    sky = _loaded_sky()
     rng = np.random.default_rng(seed)
     ts = rng.uniform(0.0, math.pi / 2.0, (rows, 1))
     t, phi = rng.uniform(2.5, 6.0, columns), float(rng.uniform(-4.0, 4.0))
@@ -76,7 +76,8 @@ def test_out_with_broadcast_parameters(rows: int, columns: int, bands: int, irra
     np.testing.assert_array_equal(buffer, expected)
 
 
-def _SKY() -> SkySH:  # noqa: N802 (a module-level cache: hypothesis refuses function-scoped fixtures)
+def _loaded_sky() -> SkySH:
+    """The shipped runtime, loaded once (hypothesis refuses function-scoped fixtures)."""
     global _LOADED
     if _LOADED is None:
         _LOADED = SkySH.load()
@@ -140,7 +141,7 @@ def test_composed_batches_hold_bounded_temporaries(sky: SkySH) -> None:
 @pytest.mark.parametrize("case", range(6))
 def test_a_wrong_buffer_is_refused_naming_out(sky: SkySH, case: int) -> None:
     frames = _frames(5)
-    what, buffer = _bad_buffers((5, 9, 3))[case]
+    buffer = _bad_buffers((5, 9, 3))[case][1]
     before = np.array(buffer, copy=True)
     with pytest.raises(ValueError, match=r"^out must be a writeable, C-contiguous numpy array of float64 and shape "
                                          r"\(5, 9, 3\)"):
