@@ -84,11 +84,12 @@ Issue 26 (item 3) raised ``skysh.runtime`` (375 to 415: ``out=``, the composed p
 coefficients call split into its route and its finish to stay within the complexity limit) and ``skysh.checks``
 (155 to 162: ``check_out``)."""
 
-BUDGETS: dict[str, int] = {"skysh code lines": 7100, "export code lines": 700, "skysh __all__ names": 260,
+BUDGETS: dict[str, int] = {"skysh code lines": 7165, "export code lines": 700, "skysh __all__ names": 260,
                            "import cycles": 0}
 """Issue 24's targets, printed beside the measured numbers (the total raised from 6,500 by issue 25's least
 window: 136 lines in ``skysh.post``, 33 in ``skysh.export``; to 6,850 by issues 26 and 27, as the packages' budgets;
-to 7,100 and 260 names by issue 27's Hosek-Wilkie runtime, exports, command line and viewer)."""
+to 7,100 and 260 names by issue 27's Hosek-Wilkie runtime, exports, command line and viewer; to 7,165 by issue 26's
+``out=`` and composed chunks, as ``skysh.runtime``'s and ``skysh.checks``' budgets)."""
 
 NOT_CODE: frozenset[int] = frozenset({tokenize.COMMENT, tokenize.NL, tokenize.NEWLINE, tokenize.INDENT,
                                       tokenize.DEDENT, tokenize.ENDMARKER, tokenize.ENCODING})
