@@ -142,13 +142,13 @@ class HosekWilkieSH:
         space = RGB_DATASET if o.colourspace is None else o.colourspace
         grey, rgb = _albedo(albedo, space)
         params = (sun_zenith, turbidity, sun_azimuth)
+        checked = False
         if out is not None:  # before any work, when the parameters broadcast (else hosek_frame names them)
             try:
                 shape = np.broadcast_shapes(*(np.shape(p) for p in params))
             except ValueError:
                 shape = None
-            if shape is not None:
-                check_out(out, shape + (o.bands * o.bands, 3), params)
+            checked = shape is not None and check_out(out, shape + (o.bands * o.bands, 3), params) is out
         if rgb is None:
             sky = hosek_frame.coefficients(sun_zenith, turbidity, grey, sun_azimuth, o.bands, space, accuracy)
         else:
@@ -162,7 +162,7 @@ class HosekWilkieSH:
             sky *= self._lobe[o.bands]
         if out is None:
             return sky
-        check_out(out, sky.shape, params)[...] = sky
+        (out if checked else check_out(out, sky.shape, params))[...] = sky
         return out
 
 

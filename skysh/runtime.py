@@ -348,9 +348,11 @@ class SkySH:
         ts, t, phi = real_scalar(sun_zenith), real_scalar(turbidity), real_scalar(sun_azimuth)
         scalar = ts is not None and t is not None and phi is not None
         frame: tuple = (ts, t, phi) if scalar else self._frames(sun_zenith, turbidity, sun_azimuth)
-        out, into, chunked = self._route(out, frame, scalar, o, colourspace, (sun_zenith, turbidity, sun_azimuth))
-        if chunked:
-            return self._composed_chunks(frame, out, o, colourspace, ground_albedo)
+        into = False  # the per-frame call (a scalar, no out) skips the route: nothing to check or chunk
+        if out is not None or not scalar:
+            out, into, chunked = self._route(out, frame, scalar, o, colourspace, (sun_zenith, turbidity, sun_azimuth))
+            if chunked:
+                return self._composed_chunks(frame, out, o, colourspace, ground_albedo)
         if sun or albedo is not None:
             lit = self._lit(frame, scalar, bands, gibbs, dering, colourspace, sun, albedo, table, irradiance)
             return _into(out, lit)
@@ -391,13 +393,9 @@ class SkySH:
         """A composed batch (checked ``frame`` of :meth:`_frames`) as calls of :func:`_composed_step` frames each into the result
         (``out`` or a new array), with the resolved options ``o`` (:meth:`skysh.options.Options.resolve` takes its
         own result back unchanged)."""
-        shape, k = frame[3], o.bands * o.bands
-        result = np.empty(shape + (k, 3)) if out is None else out
-        flat = result.reshape(-1, k, 3)
-        ts, t, phi = _flat_frames(*frame)
-        step = _composed_step(o.bands)
-        for start in range(0, flat.shape[0], step):
-            part = slice(start, start + step)
+        result = np.empty(frame[3] + (o.bands * o.bands, 3)) if out is None else out
+        flat, (ts, t, phi), step = result.reshape(-1, *result.shape[-2:]), _flat_frames(*frame), _composed_step(o.bands)
+        for part in (slice(start, start + step) for start in range(0, flat.shape[0], step)):
             self.coefficients(ts[part], t[part], phi[part], o.bands, o.gibbs, o.dering, o.irradiance, colourspace,
                               o.sun, ground_albedo, o.irradiance_table, out=flat[part])
         return result
